@@ -1,0 +1,52 @@
+# GlassFusion: the two set-up commands are `make demo` and `make test`.
+# Both install the Debian packages the build needs (only those missing), then build.
+
+BUILD_DIR ?= build
+DEMO_OUT  ?= demo-out
+JOBS      ?= $(shell nproc)
+CMAKE_FLAGS ?=
+
+# Every Debian (bookworm) package the build, the tests and the measuring scripts need.
+DEB_PACKAGES := cmake make g++ pkg-config \
+  libopencv-dev libeigen3-dev libceres-dev libpcl-dev \
+  libopenni2-dev libfreenect-dev \
+  libcli11-dev nlohmann-json3-dev libspdlog-dev \
+  libgtest-dev libgmock-dev libbenchmark-dev \
+  python3-numpy python3-opencv
+
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+.PHONY: all deps configure build test demo clean format
+
+all: build
+
+deps:
+	@missing=""; \
+	for p in $(DEB_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "deps: installing$$missing"; \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get update -q && \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends $$missing; \
+	else \
+	  echo "deps: all $(words $(DEB_PACKAGES)) Debian packages present"; \
+	fi
+
+configure: deps
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release -DGF_BUILD_TESTS=ON $(CMAKE_FLAGS)
+
+build: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+test: build
+	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+
+demo: build
+	$(BUILD_DIR)/apps/glassfusion demo --out $(DEMO_OUT)
+
+format:
+	find acquisition registration sfm surfels apps datasets tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
+
+clean:
+	rm -rf $(BUILD_DIR) $(DEMO_OUT)

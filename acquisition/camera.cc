@@ -1,0 +1,166 @@
+#include "acquisition/camera.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "acquisition/errors.h"
+#include "acquisition/file_util.h"
+
+namespace gf {
+
+bool Camera::Check(std::string* message) const {
+  auto fail = [&](const std::string& m) {
+    if (message) *message = m;
+    return false;
+  };
+  if (width <= 0 || height <= 0) return fail("image size must be positive");
+  if (!(fx > 0) || !(fy > 0) || !std::isfinite(fx) || !std::isfinite(fy))
+    return fail("focal lengths fx, fy must be positive and finite");
+  if (!std::isfinite(cx) || !std::isfinite(cy)) return fail("principal point must be finite");
+  for (double d : distortion)
+    if (!std::isfinite(d)) return fail("distortion coefficients must be finite");
+  return true;
+}
+
+bool Camera::HasDistortion() const {
+  for (double d : distortion)
+    if (d != 0.0) return true;
+  return false;
+}
+
+Eigen::Vector2d Camera::Project(const Eigen::Vector3d& p) const {
+  return {fx * p.x() / p.z() + cx, fy * p.y() / p.z() + cy};
+}
+
+Eigen::Vector3d Camera::BackProject(const Eigen::Vector2d& pixel, double depth) const {
+  return {(pixel.x() - cx) / fx * depth, (pixel.y() - cy) / fy * depth, depth};
+}
+
+Eigen::Vector2d Camera::Distort(const Eigen::Vector2d& n) const {
+  const double k1 = distortion[0], k2 = distortion[1], p1 = distortion[2], p2 = distortion[3],
+               k3 = distortion[4];
+  const double x = n.x(), y = n.y();
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  return {x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+          y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y};
+}
+
+Eigen::Vector2d Camera::Undistort(const Eigen::Vector2d& d) const {
+  // Fixed-point iteration n <- (d - tangential(n)) / radial(n), as OpenCV does; converges quickly
+  // for the mild distortion of depth cameras.
+  const double k1 = distortion[0], k2 = distortion[1], p1 = distortion[2], p2 = distortion[3],
+               k3 = distortion[4];
+  Eigen::Vector2d n = d;
+  for (int i = 0; i < 50; ++i) {
+    const double x = n.x(), y = n.y();
+    const double r2 = x * x + y * y;
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    const double dx = 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+    const double dy = p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+    Eigen::Vector2d next((d.x() - dx) / radial, (d.y() - dy) / radial);
+    if ((next - n).squaredNorm() < 1e-24) return next;
+    n = next;
+  }
+  return n;
+}
+
+Eigen::Vector2d Camera::ProjectDistorted(const Eigen::Vector3d& p) const {
+  const Eigen::Vector2d d = Distort({p.x() / p.z(), p.y() / p.z()});
+  return {fx * d.x() + cx, fy * d.y() + cy};
+}
+
+Eigen::Matrix3d Camera::K() const {
+  Eigen::Matrix3d k;
+  k << fx, 0, cx, 0, fy, cy, 0, 0, 1;
+  return k;
+}
+
+cv::Mat Camera::CvK() const { return (cv::Mat_<double>(3, 3) << fx, 0, cx, 0, fy, cy, 0, 0, 1); }
+
+cv::Mat Camera::CvDistortion() const {
+  return (cv::Mat_<double>(1, 5) << distortion[0], distortion[1], distortion[2], distortion[3],
+          distortion[4]);
+}
+
+Camera Camera::Scaled(double factor) const {
+  Camera c = *this;
+  c.width = static_cast<int>(std::lround(width * factor));
+  c.height = static_cast<int>(std::lround(height * factor));
+  c.fx = fx * factor;
+  c.fy = fy * factor;
+  // Pixel centres: continuous coordinate u maps to (u + 0.5) * factor - 0.5.
+  c.cx = (cx + 0.5) * factor - 0.5;
+  c.cy = (cy + 0.5) * factor - 0.5;
+  return c;
+}
+
+CameraFile LoadCameraFile(const std::string& path) {
+  const std::string text = ReadTextFile(path);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path, std::string("not valid JSON (") + e.what() + ")");
+  }
+  if (!j.is_object()) throw InputError(path, "expected a JSON object");
+  auto number = [&](const char* key) -> double {
+    if (!j.contains(key)) throw InputError(path, std::string("missing field \"") + key + "\"");
+    if (!j[key].is_number())
+      throw InputError(path, std::string("field \"") + key + "\" must be a number");
+    return j[key].get<double>();
+  };
+  CameraFile file;
+  Camera& c = file.camera;
+  const double width = number("width"), height = number("height");
+  if (width != std::floor(width) || height != std::floor(height))
+    throw InputError(path, "width and height must be integers");
+  c.width = static_cast<int>(width);
+  c.height = static_cast<int>(height);
+  c.fx = number("fx");
+  c.fy = number("fy");
+  c.cx = number("cx");
+  c.cy = number("cy");
+  if (j.contains("distortion")) {
+    const auto& d = j["distortion"];
+    if (!d.is_array() || d.size() > 5)
+      throw InputError(path, "\"distortion\" must be an array of at most 5 numbers [k1,k2,p1,p2,k3]");
+    for (size_t i = 0; i < d.size(); ++i) {
+      if (!d[i].is_number()) throw InputError(path, "\"distortion\" must hold numbers only");
+      c.distortion[i] = d[i].get<double>();
+    }
+  }
+  if (j.contains("depth_scale")) {
+    file.depth_scale = number("depth_scale");
+    if (!(file.depth_scale > 0) || !std::isfinite(file.depth_scale))
+      throw InputError(path, "\"depth_scale\" must be a positive number of depth units per metre");
+  }
+  if (j.contains("depth_registered_to_color")) {
+    if (!j["depth_registered_to_color"].is_boolean())
+      throw InputError(path, "\"depth_registered_to_color\" must be true or false");
+    file.depth_registered_to_color = j["depth_registered_to_color"].get<bool>();
+  }
+  std::string problem;
+  if (!c.Check(&problem)) throw InputError(path, problem);
+  return file;
+}
+
+void SaveCameraFile(const std::string& path, const CameraFile& file) {
+  const Camera& c = file.camera;
+  nlohmann::ordered_json j;
+  j["width"] = c.width;
+  j["height"] = c.height;
+  j["fx"] = c.fx;
+  j["fy"] = c.fy;
+  j["cx"] = c.cx;
+  j["cy"] = c.cy;
+  j["distortion"] = std::vector<double>(c.distortion.begin(), c.distortion.end());
+  j["depth_scale"] = file.depth_scale;
+  j["depth_registered_to_color"] = file.depth_registered_to_color;
+  WriteTextFileAtomically(path, j.dump(2) + "\n");
+}
+
+}  // namespace gf

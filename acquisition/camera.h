@@ -1,0 +1,81 @@
+// Pinhole camera with OpenCV (Brown-Conrady) distortion, and the camera.json file format.
+//
+// Units: focal lengths and principal point in pixels, image size in pixels, points in metres.
+// Pixel convention: (0,0) is the centre of the top-left pixel (OpenCV, TUM, ICL-NUIM).
+// Frames: a point_in_camera has +x right, +y down, +z forward (optical axis).
+//
+// camera.json (schema of ../shared/datasets/README.md):
+//   { "width": 640, "height": 480, "fx": 525.0, "fy": 525.0, "cx": 319.5, "cy": 239.5,
+//     "distortion": [k1, k2, p1, p2, k3], "depth_scale": 5000.0,
+//     "depth_registered_to_color": true }
+// depth_scale is raw depth units per metre (PNG value / depth_scale = metres).
+//
+// Usage:
+//   gf::CameraFile file = gf::LoadCameraFile("tum/camera.json");
+//   Eigen::Vector2d uv = file.camera.Project(point_in_camera);
+//   Eigen::Vector3d p = file.camera.BackProject(uv, depth_m);
+//
+// Thread-safety: Camera is a value type; const methods are safe to call concurrently.
+#pragma once
+
+#include <array>
+#include <string>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+namespace gf {
+
+struct Camera {
+  int width = 640;   // image width, pixels
+  int height = 480;  // image height, pixels
+  double fx = 525.0;  // focal length along x, pixels
+  double fy = 525.0;  // focal length along y, pixels
+  double cx = 319.5;  // principal point x, pixels
+  double cy = 239.5;  // principal point y, pixels
+  // OpenCV distortion [k1, k2, p1, p2, k3], dimensionless; all zero = ideal pinhole.
+  std::array<double, 5> distortion{0, 0, 0, 0, 0};
+
+  // Valid intrinsics: positive size and focal lengths, finite values. Message says what is wrong.
+  bool Check(std::string* message = nullptr) const;
+  bool HasDistortion() const;
+
+  // Ideal pinhole projection (no distortion). point_in_camera.z() must be > 0.
+  Eigen::Vector2d Project(const Eigen::Vector3d& point_in_camera) const;
+  // Inverse of Project for a pixel and its depth along the optical axis (metres, z not range).
+  Eigen::Vector3d BackProject(const Eigen::Vector2d& pixel, double depth) const;
+
+  // Distorted projection, the same model as cv::projectPoints.
+  Eigen::Vector2d ProjectDistorted(const Eigen::Vector3d& point_in_camera) const;
+  // Normalised image coordinates (x/z, y/z) <-> distorted normalised coordinates.
+  Eigen::Vector2d Distort(const Eigen::Vector2d& normalized) const;
+  // Iterative inverse of Distort (fixed-point, as cv::undistortPoints); exact to ~1e-9 for
+  // Kinect-like lenses.
+  Eigen::Vector2d Undistort(const Eigen::Vector2d& distorted_normalized) const;
+
+  bool InImage(const Eigen::Vector2d& pixel) const {
+    return pixel.x() >= -0.5 && pixel.y() >= -0.5 && pixel.x() < width - 0.5 &&
+           pixel.y() < height - 0.5;
+  }
+
+  Eigen::Matrix3d K() const;
+  cv::Mat CvK() const;             // 3x3 CV_64F
+  cv::Mat CvDistortion() const;    // 1x5 CV_64F
+  // The same camera for an image scaled by `factor` (e.g. 0.5 for a pyramid level).
+  Camera Scaled(double factor) const;
+};
+
+// Everything camera.json holds.
+struct CameraFile {
+  Camera camera;
+  double depth_scale = 5000.0;            // raw depth units per metre
+  bool depth_registered_to_color = true;  // depth pixels already aligned with colour pixels
+};
+
+// Reads camera.json; throws InputError naming the file on a missing file, bad JSON, a missing or
+// wrongly typed field, or invalid intrinsics.
+CameraFile LoadCameraFile(const std::string& path);
+// Writes camera.json atomically (temporary name, then rename).
+void SaveCameraFile(const std::string& path, const CameraFile& file);
+
+}  // namespace gf

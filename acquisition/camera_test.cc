@@ -1,0 +1,140 @@
+#include "acquisition/camera.h"
+
+#include <fstream>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <opencv2/calib3d.hpp>
+
+#include "acquisition/errors.h"
+#include "tests/testing.h"
+
+namespace gf {
+namespace {
+
+Camera TumFr1() {
+  Camera c;
+  c.fx = 517.3;
+  c.fy = 516.5;
+  c.cx = 318.6;
+  c.cy = 255.3;
+  c.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
+  return c;
+}
+
+void WriteText(const std::string& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
+
+TEST(Camera, LoadsTheTumCameraJson) {
+  GF_REQUIRE_DATASET(tum, "tum_fr1_xyz_head");
+  const CameraFile f = LoadCameraFile(tum + "/camera.json");
+  EXPECT_EQ(f.camera.width, 640);
+  EXPECT_EQ(f.camera.height, 480);
+  EXPECT_DOUBLE_EQ(f.camera.fx, 517.3);
+  EXPECT_DOUBLE_EQ(f.camera.cy, 255.3);
+  EXPECT_DOUBLE_EQ(f.camera.distortion[4], 1.1633);
+  EXPECT_DOUBLE_EQ(f.depth_scale, 5000.0);
+  EXPECT_TRUE(f.depth_registered_to_color);
+}
+
+TEST(Camera, JsonRoundTripKeepsEveryField) {
+  testing::TempDir dir;
+  CameraFile f;
+  f.camera = TumFr1();
+  f.camera.width = 320;
+  f.camera.height = 240;
+  f.depth_scale = 1000.0;
+  f.depth_registered_to_color = false;
+  SaveCameraFile(dir / "camera.json", f);
+  const CameraFile g = LoadCameraFile(dir / "camera.json");
+  EXPECT_EQ(g.camera.width, 320);
+  EXPECT_EQ(g.camera.height, 240);
+  EXPECT_EQ(g.camera.fx, f.camera.fx);
+  EXPECT_EQ(g.camera.fy, f.camera.fy);
+  EXPECT_EQ(g.camera.cx, f.camera.cx);
+  EXPECT_EQ(g.camera.cy, f.camera.cy);
+  EXPECT_EQ(g.camera.distortion, f.camera.distortion);
+  EXPECT_EQ(g.depth_scale, 1000.0);
+  EXPECT_FALSE(g.depth_registered_to_color);
+}
+
+TEST(Camera, BadFilesGiveOneLineErrorsNamingFileAndProblem) {
+  testing::TempDir dir;
+  const std::string path = dir / "camera.json";
+  auto expect_error = [&](const std::string& text, const std::string& needle) {
+    WriteText(path, text);
+    try {
+      LoadCameraFile(path);
+      ADD_FAILURE() << "no error for: " << text;
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(path), std::string::npos) << what;
+      EXPECT_NE(what.find(needle), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  };
+  expect_error("{ not json", "not valid JSON");
+  expect_error(R"({"width": 640, "height": 480, "fx": 525, "fy": 525, "cx": 319.5})", "\"cy\"");
+  expect_error(R"({"width": 640, "height": 480, "fx": -5, "fy": 525, "cx": 1, "cy": 1})", "focal");
+  expect_error(R"({"width": 640, "height": 480, "fx": 5, "fy": 5, "cx": 1, "cy": 1,
+                   "depth_scale": 0})", "depth_scale");
+  expect_error(R"({"width": "640", "height": 480, "fx": 5, "fy": 5, "cx": 1, "cy": 1})", "number");
+  EXPECT_THROW(LoadCameraFile(dir / "missing.json"), InputError);
+}
+
+TEST(Camera, BackProjectInvertsProject) {
+  const Camera c = TumFr1();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0, 639), v(0, 479), z(0.4, 6.0);
+  for (int i = 0; i < 1000; ++i) {
+    const Eigen::Vector2d pixel(u(rng), v(rng));
+    const double depth = z(rng);
+    const Eigen::Vector3d p = c.BackProject(pixel, depth);
+    EXPECT_NEAR(p.z(), depth, 1e-12);
+    EXPECT_LT((c.Project(p) - pixel).norm(), 1e-9);
+  }
+  // The principal point lies on the optical axis.
+  EXPECT_LT((c.BackProject({c.cx, c.cy}, 2.0) - Eigen::Vector3d(0, 0, 2.0)).norm(), 1e-12);
+}
+
+TEST(Camera, DistortedProjectionMatchesOpenCv) {
+  const Camera c = TumFr1();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> xy(-0.5, 0.5), z(0.5, 4.0);
+  std::vector<cv::Point3d> points;
+  for (int i = 0; i < 200; ++i) points.emplace_back(xy(rng), xy(rng) * 0.8, z(rng));
+  std::vector<cv::Point2d> expected;
+  cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), c.CvK(), c.CvDistortion(),
+                    expected);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector2d got = c.ProjectDistorted({points[i].x, points[i].y, points[i].z});
+    EXPECT_NEAR(got.x(), expected[i].x, 1e-6);
+    EXPECT_NEAR(got.y(), expected[i].y, 1e-6);
+  }
+}
+
+TEST(Camera, UndistortInvertsDistortOverTheImage) {
+  const Camera c = TumFr1();
+  for (double x = -0.55; x <= 0.55; x += 0.05) {
+    for (double y = -0.45; y <= 0.45; y += 0.05) {
+      const Eigen::Vector2d n(x, y);
+      EXPECT_LT((c.Undistort(c.Distort(n)) - n).norm(), 1e-9) << x << "," << y;
+    }
+  }
+}
+
+TEST(Camera, ScaledCameraSeesTheSamePointAtTheScaledPixel) {
+  const Camera c = TumFr1();
+  const Camera half = c.Scaled(0.5);
+  EXPECT_EQ(half.width, 320);
+  EXPECT_EQ(half.height, 240);
+  const Eigen::Vector3d p(0.3, -0.2, 1.7);
+  const Eigen::Vector2d full = c.Project(p);
+  const Eigen::Vector2d small = half.Project(p);
+  // Pixel centres: small = (full + 0.5) / 2 - 0.5.
+  EXPECT_LT((small - ((full.array() + 0.5) * 0.5 - 0.5).matrix()).norm(), 1e-9);
+}
+
+}  // namespace
+}  // namespace gf

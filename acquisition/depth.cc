@@ -1,0 +1,163 @@
+#include "acquisition/depth.h"
+
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include "acquisition/errors.h"
+
+namespace gf {
+
+DepthConvention DepthConvention::ScaledUnits(double units_per_metre) {
+  GF_CHECK(units_per_metre > 0 && std::isfinite(units_per_metre),
+           "depth scale must be positive units per metre");
+  return DepthConvention(Kind::kScaledUnits, units_per_metre);
+}
+
+DepthConvention DepthConvention::FromDepthScale(double units_per_metre) {
+  return units_per_metre == 1000.0 ? Millimetres() : ScaledUnits(units_per_metre);
+}
+
+std::string DepthConvention::Name() const {
+  switch (kind_) {
+    case Kind::kMillimetres:
+      return "millimetres";
+    case Kind::kScaledUnits: {
+      std::ostringstream s;
+      s << "scaled_units(" << units_per_metre_ << ")";
+      return s.str();
+    }
+    case Kind::kKinectV1Raw11Bit:
+      return "kinect_v1_raw_11bit";
+  }
+  return "unknown";
+}
+
+uint16_t DepthConvention::NoReturnValue() const {
+  return kind_ == Kind::kKinectV1Raw11Bit ? kKinectNoReturn : 0;
+}
+
+bool DepthConvention::IsNoReturn(uint16_t raw) const {
+  if (kind_ == Kind::kKinectV1Raw11Bit) return raw >= kKinectNoReturn;
+  return raw == 0;
+}
+
+double DepthConvention::ToMetres(uint16_t raw) const {
+  if (IsNoReturn(raw)) return 0.0;
+  if (kind_ == Kind::kKinectV1Raw11Bit) {
+    const double inverse_depth = kKinectA * raw + kKinectB;
+    return inverse_depth > 0 ? 1.0 / inverse_depth : 0.0;
+  }
+  return raw / units_per_metre_;
+}
+
+uint16_t DepthConvention::FromMetres(double metres) const {
+  if (!(metres > 0) || !std::isfinite(metres)) return NoReturnValue();
+  if (kind_ == Kind::kKinectV1Raw11Bit) {
+    const double raw = std::round((1.0 / metres - kKinectB) / kKinectA);
+    // Past the model's asymptote (raw ~1084.6) a disparity value maps to no positive depth.
+    if (raw < 0 || raw >= kKinectNoReturn || kKinectA * raw + kKinectB <= 0) return NoReturnValue();
+    return static_cast<uint16_t>(raw);
+  }
+  const double raw = std::round(metres * units_per_metre_);
+  if (raw < 1 || raw > 65535) return NoReturnValue();
+  return static_cast<uint16_t>(raw);
+}
+
+std::string DepthConvention::ValidateRaw(const cv::Mat& raw) const {
+  if (raw.empty()) return "empty depth image";
+  if (raw.type() != CV_16UC1) return "depth image must be single-channel 16-bit";
+  if (kind_ == Kind::kKinectV1Raw11Bit) {
+    double max_value = 0;
+    cv::minMaxLoc(raw, nullptr, &max_value);
+    if (max_value > kKinectNoReturn) {
+      std::ostringstream s;
+      s << "values up to " << max_value
+        << " exceed 2047: not Kinect v1 11-bit disparity (millimetres? byte order?)";
+      return s.str();
+    }
+  }
+  return {};
+}
+
+bool DepthConversionOptions::Check(std::string* message) const {
+  if (!(min_depth_m >= 0) || !(max_depth_m > min_depth_m)) {
+    if (message) *message = "need 0 <= min_depth_m < max_depth_m";
+    return false;
+  }
+  return true;
+}
+
+void ConvertDepth(const cv::Mat& raw, const DepthConvention& convention,
+                  const DepthConversionOptions& options, cv::Mat* depth_m, cv::Mat* hole_mask) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+  GF_CHECK(raw.type() == CV_16UC1, "raw depth must be CV_16UC1");
+  // One lookup table of 65536 entries makes conversion a single pass for any convention.
+  std::vector<float> metres(65536);
+  std::vector<uint8_t> code(65536);
+  for (int v = 0; v < 65536; ++v) {
+    const uint16_t r = static_cast<uint16_t>(v);
+    const double m = convention.ToMetres(r);
+    if (convention.IsNoReturn(r)) {
+      code[v] = static_cast<uint8_t>(HoleCode::kNoReturn);
+      metres[v] = 0.f;
+    } else if (!(m >= options.min_depth_m && m <= options.max_depth_m)) {
+      code[v] = static_cast<uint8_t>(HoleCode::kOutOfRange);
+      metres[v] = 0.f;
+    } else {
+      code[v] = static_cast<uint8_t>(HoleCode::kValid);
+      metres[v] = static_cast<float>(m);
+    }
+  }
+  if (depth_m) depth_m->create(raw.size(), CV_32FC1);
+  if (hole_mask) hole_mask->create(raw.size(), CV_8UC1);
+  for (int y = 0; y < raw.rows; ++y) {
+    const uint16_t* in = raw.ptr<uint16_t>(y);
+    float* d = depth_m ? depth_m->ptr<float>(y) : nullptr;
+    uint8_t* h = hole_mask ? hole_mask->ptr<uint8_t>(y) : nullptr;
+    for (int x = 0; x < raw.cols; ++x) {
+      if (d) d[x] = metres[in[x]];
+      if (h) h[x] = code[in[x]];
+    }
+  }
+}
+
+cv::Mat DepthToRaw(const cv::Mat& depth_m, const DepthConvention& convention) {
+  GF_CHECK(depth_m.type() == CV_32FC1, "metric depth must be CV_32FC1");
+  cv::Mat raw(depth_m.size(), CV_16UC1);
+  for (int y = 0; y < depth_m.rows; ++y) {
+    const float* d = depth_m.ptr<float>(y);
+    uint16_t* r = raw.ptr<uint16_t>(y);
+    for (int x = 0; x < depth_m.cols; ++x) r[x] = convention.FromMetres(d[x]);
+  }
+  return raw;
+}
+
+HoleStats& HoleStats::operator+=(const HoleStats& o) {
+  pixels += o.pixels;
+  no_return += o.no_return;
+  out_of_range += o.out_of_range;
+  shadow += o.shadow;
+  return *this;
+}
+
+HoleStats CountHoles(const cv::Mat& hole_mask) {
+  GF_CHECK(hole_mask.type() == CV_8UC1, "hole mask must be CV_8UC1");
+  HoleStats s;
+  s.pixels = hole_mask.total();
+  for (int y = 0; y < hole_mask.rows; ++y) {
+    const uint8_t* h = hole_mask.ptr<uint8_t>(y);
+    for (int x = 0; x < hole_mask.cols; ++x) {
+      switch (static_cast<HoleCode>(h[x])) {
+        case HoleCode::kNoReturn: ++s.no_return; break;
+        case HoleCode::kOutOfRange: ++s.out_of_range; break;
+        case HoleCode::kShadow: ++s.shadow; break;
+        default: break;
+      }
+    }
+  }
+  return s;
+}
+
+}  // namespace gf

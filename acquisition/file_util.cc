@@ -1,0 +1,75 @@
+#include "acquisition/file_util.h"
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <system_error>
+
+#include <unistd.h>
+
+#include "acquisition/errors.h"
+
+namespace fs = std::filesystem;
+
+namespace gf {
+
+std::string ReadTextFile(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, "file not found");
+  if (fs::is_directory(path, ec)) throw InputError(path, "is a folder, expected a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot open for reading");
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) throw InputError(path, "read error");
+  return buffer.str();
+}
+
+void WriteFileAtomically(const std::string& path,
+                         const std::function<void(const std::string&)>& write) {
+  static std::atomic<unsigned> counter{0};
+  const fs::path final_path(path);
+  // Keep the extension last: writers such as cv::imwrite choose the format from it.
+  const std::string temporary =
+      (final_path.parent_path() /
+       (".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + "-" +
+        final_path.filename().string()))
+          .string();
+  try {
+    write(temporary);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(temporary, ec);
+    throw;
+  }
+  std::error_code ec;
+  if (!fs::exists(temporary, ec)) throw InputError(path, "writer produced no output");
+  fs::rename(temporary, final_path, ec);
+  if (ec) {
+    fs::remove(temporary, ec);
+    throw InputError(path, "cannot rename temporary output into place: " + ec.message());
+  }
+}
+
+void WriteTextFileAtomically(const std::string& path, const std::string& content) {
+  WriteFileAtomically(path, [&](const std::string& temporary) {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(path, "cannot open for writing");
+    out << content;
+    out.close();
+    if (!out) throw InputError(path, "write error (disk full?)");
+  });
+}
+
+bool IsRegularFile(const std::string& path) {
+  std::error_code ec;
+  return fs::is_regular_file(path, ec);
+}
+
+bool IsDirectory(const std::string& path) {
+  std::error_code ec;
+  return fs::is_directory(path, ec);
+}
+
+}  // namespace gf

@@ -1,0 +1,25 @@
+// Small file helpers used at the I/O edges of every module.
+//
+// Every output GlassFusion writes goes through WriteFileAtomically: the content is written to a
+// temporary name in the same folder, then renamed over the final name, so an interrupted run never
+// leaves a truncated file that looks complete.
+#pragma once
+
+#include <functional>
+#include <string>
+
+namespace gf {
+
+// Whole text file; throws InputError("<path>: ...") when it is missing or unreadable.
+std::string ReadTextFile(const std::string& path);
+
+// Calls write(temporary_path), then renames temporary_path to path. If write throws, the temporary
+// file is removed and the exception propagates; path is untouched. The parent folder must exist.
+void WriteFileAtomically(const std::string& path,
+                         const std::function<void(const std::string& temporary_path)>& write);
+void WriteTextFileAtomically(const std::string& path, const std::string& content);
+
+bool IsRegularFile(const std::string& path);
+bool IsDirectory(const std::string& path);
+
+}  // namespace gf

@@ -1,0 +1,285 @@
+#include "acquisition/frame_source.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include <spdlog/spdlog.h>
+
+#include "acquisition/errors.h"
+#include "acquisition/file_util.h"
+#include "acquisition/image_io.h"
+
+namespace fs = std::filesystem;
+
+namespace gf {
+namespace {
+
+struct IndexLine {
+  double timestamp;
+  std::string timestamp_text;
+  std::string path;  // absolute or folder-relative as listed, resolved against the folder
+};
+
+// A TUM index file: "timestamp filename" per line, '#' comments.
+std::vector<IndexLine> ReadTumIndex(const std::string& folder, const std::string& name) {
+  const std::string path = (fs::path(folder) / name).string();
+  std::istringstream in(ReadTextFile(path));
+  std::vector<IndexLine> lines;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const size_t start = line.find_first_not_of(" \t\r");
+    if (start == std::string::npos || line[start] == '#') continue;
+    std::istringstream fields(line);
+    IndexLine entry;
+    std::string file;
+    if (!(fields >> entry.timestamp_text >> file))
+      throw InputError(path, "line " + std::to_string(number) + ": expected \"timestamp filename\"");
+    try {
+      size_t used = 0;
+      entry.timestamp = std::stod(entry.timestamp_text, &used);
+      if (used != entry.timestamp_text.size()) throw std::invalid_argument("trailing");
+    } catch (const std::exception&) {
+      throw InputError(path, "line " + std::to_string(number) + ": bad timestamp \"" +
+                                 entry.timestamp_text + "\"");
+    }
+    entry.path = (fs::path(folder) / file).string();
+    lines.push_back(entry);
+  }
+  if (lines.empty()) throw InputError(path, "index lists no images");
+  std::stable_sort(lines.begin(), lines.end(),
+                   [](const IndexLine& a, const IndexLine& b) { return a.timestamp < b.timestamp; });
+  return lines;
+}
+
+CameraFile LoadFolderCamera(const std::string& folder, const FrameSourceOptions& options) {
+  const std::string path =
+      options.camera_file.empty() ? (fs::path(folder) / "camera.json").string() : options.camera_file;
+  if (!IsRegularFile(path))
+    throw InputError(path, "camera intrinsics not found (add camera.json or pass --camera FILE)");
+  return LoadCameraFile(path);
+}
+
+std::vector<std::string> ImagesIn(const std::string& dir) {
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;
+    std::string ext = e.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".ppm")
+      files.push_back(e.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::string FirstExistingDir(const std::string& folder, std::initializer_list<const char*> names) {
+  for (const char* n : names) {
+    const std::string p = (fs::path(folder) / n).string();
+    if (IsDirectory(p)) return p;
+  }
+  return {};
+}
+
+}  // namespace
+
+bool FrameSourceOptions::Check(std::string* message) const {
+  if (!depth.Check(message)) return false;
+  if (!(max_association_dt_s > 0)) {
+    if (message) *message = "max_association_dt_s must be positive";
+    return false;
+  }
+  return true;
+}
+
+std::vector<std::pair<size_t, size_t>> AssociateTimestamps(const std::vector<double>& a,
+                                                           const std::vector<double>& b,
+                                                           double max_dt) {
+  // Candidate pairs within the window (b is sorted, so a binary search bounds each a's range),
+  // then greedy by increasing time difference so that each frame is used at most once.
+  struct Candidate {
+    double dt;
+    size_t i, j;
+  };
+  std::vector<Candidate> candidates;
+  for (size_t i = 0; i < a.size(); ++i) {
+    auto lo = std::lower_bound(b.begin(), b.end(), a[i] - max_dt);
+    for (auto it = lo; it != b.end() && *it <= a[i] + max_dt; ++it) {
+      const double dt = std::abs(*it - a[i]);
+      if (dt < max_dt) candidates.push_back({dt, i, static_cast<size_t>(it - b.begin())});
+    }
+  }
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& x, const Candidate& y) { return x.dt < y.dt; });
+  std::vector<bool> used_a(a.size(), false), used_b(b.size(), false);
+  std::vector<std::pair<size_t, size_t>> pairs;
+  for (const Candidate& c : candidates) {
+    if (used_a[c.i] || used_b[c.j]) continue;
+    used_a[c.i] = used_b[c.j] = true;
+    pairs.emplace_back(c.i, c.j);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+FolderFrameSource::FolderFrameSource(std::string kind, std::string input, CameraFile camera,
+                                     DepthConvention convention,
+                                     std::vector<FolderFrameEntry> entries,
+                                     FrameSourceOptions options)
+    : kind_(std::move(kind)),
+      input_(std::move(input)),
+      camera_(camera),
+      convention_(convention),
+      entries_(std::move(entries)),
+      options_(std::move(options)) {
+  std::string problem;
+  GF_CHECK(options_.Check(&problem), problem);
+}
+
+bool FolderFrameSource::Next(RgbdFrame* frame) {
+  if (next_ >= entries_.size()) return false;
+  const FolderFrameEntry& e = entries_[next_];
+  RgbdFrame f;
+  f.index = static_cast<int>(next_);
+  f.timestamp = e.timestamp;
+  f.timestamp_text = e.timestamp_text;
+  f.color_timestamp = e.color_timestamp;
+  f.color_path = e.color_path;
+  f.depth_path = e.depth_path;
+  const Camera& cam = camera_.camera;
+  const cv::Mat raw = ReadDepthImage(e.depth_path);
+  if (raw.cols != cam.width || raw.rows != cam.height) {
+    std::ostringstream s;
+    s << "depth image is " << raw.cols << "x" << raw.rows << " but the camera is " << cam.width
+      << "x" << cam.height;
+    throw InputError(e.depth_path, s.str());
+  }
+  const std::string problem = convention_.ValidateRaw(raw);
+  if (!problem.empty()) throw InputError(e.depth_path, problem);
+  ConvertDepth(raw, convention_, options_.depth, &f.depth, &f.hole_mask);
+  if (options_.load_color) {
+    f.color = ReadColorImage(e.color_path);
+    if (f.color.size() != raw.size()) {
+      std::ostringstream s;
+      s << "colour image is " << f.color.cols << "x" << f.color.rows << " but its depth image "
+        << e.depth_path << " is " << raw.cols << "x" << raw.rows;
+      throw InputError(e.color_path, s.str());
+    }
+  }
+  *frame = std::move(f);
+  ++next_;
+  return true;
+}
+
+std::unique_ptr<FolderFrameSource> OpenTumFolder(const std::string& folder,
+                                                 const FrameSourceOptions& options) {
+  const std::vector<IndexLine> depth = ReadTumIndex(folder, "depth.txt");
+  const std::vector<IndexLine> color = ReadTumIndex(folder, "rgb.txt");
+  const CameraFile camera = LoadFolderCamera(folder, options);
+  std::vector<double> td, tc;
+  for (const auto& d : depth) td.push_back(d.timestamp);
+  for (const auto& c : color) tc.push_back(c.timestamp);
+  const auto pairs = AssociateTimestamps(td, tc, options.max_association_dt_s);
+  std::vector<FolderFrameEntry> entries;
+  for (const auto& [i, j] : pairs) {
+    FolderFrameEntry e;
+    e.timestamp = depth[i].timestamp;
+    e.timestamp_text = depth[i].timestamp_text;
+    e.color_timestamp = color[j].timestamp;
+    e.depth_path = depth[i].path;
+    e.color_path = color[j].path;
+    entries.push_back(e);
+  }
+  if (entries.empty())
+    throw InputError((fs::path(folder) / "depth.txt").string(),
+                     "no depth frame has a colour frame within " +
+                         std::to_string(options.max_association_dt_s * 1000) + " ms");
+  auto source = std::make_unique<FolderFrameSource>(
+      "tum", folder, camera, DepthConvention::FromDepthScale(camera.depth_scale), std::move(entries),
+      options);
+  source->listed_depth = static_cast<int>(depth.size());
+  source->listed_color = static_cast<int>(color.size());
+  source->unmatched_depth = static_cast<int>(depth.size() - pairs.size());
+  source->unmatched_color = static_cast<int>(color.size() - pairs.size());
+  if (source->unmatched_depth || source->unmatched_color)
+    spdlog::info("{}: dropped {} depth and {} colour frames without a partner within {} ms", folder,
+                 source->unmatched_depth, source->unmatched_color,
+                 options.max_association_dt_s * 1000);
+  return source;
+}
+
+std::unique_ptr<FolderFrameSource> OpenRedwoodFolder(const std::string& folder,
+                                                     const FrameSourceOptions& options) {
+  const std::string color_dir = FirstExistingDir(folder, {"image", "color", "rgb"});
+  if (color_dir.empty()) throw InputError(folder, "no image/, color/ or rgb/ folder");
+  std::string depth_dir;
+  if (!options.depth_folder.empty()) {
+    depth_dir = (fs::path(folder) / options.depth_folder).string();
+    if (!IsDirectory(depth_dir)) throw InputError(depth_dir, "depth folder not found");
+  } else {
+    depth_dir = FirstExistingDir(folder, {"depth", "depth_noisy"});
+    if (depth_dir.empty()) throw InputError(folder, "no depth/ folder");
+  }
+  const CameraFile camera = LoadFolderCamera(folder, options);
+  const std::vector<std::string> colors = ImagesIn(color_dir);
+  const std::vector<std::string> depths = ImagesIn(depth_dir);
+  if (depths.empty()) throw InputError(depth_dir, "holds no depth images");
+  if (colors.size() != depths.size())
+    throw InputError(folder, std::to_string(colors.size()) + " colour images in " +
+                                 fs::path(color_dir).filename().string() + "/ but " +
+                                 std::to_string(depths.size()) + " depth images in " +
+                                 fs::path(depth_dir).filename().string() + "/");
+  std::vector<FolderFrameEntry> entries;
+  for (size_t i = 0; i < depths.size(); ++i) {
+    FolderFrameEntry e;
+    e.timestamp = e.color_timestamp = static_cast<double>(i);
+    e.timestamp_text = std::to_string(i);
+    e.color_path = colors[i];
+    e.depth_path = depths[i];
+    entries.push_back(e);
+  }
+  auto source = std::make_unique<FolderFrameSource>(
+      "redwood", folder, camera, DepthConvention::FromDepthScale(camera.depth_scale),
+      std::move(entries), options);
+  source->listed_depth = source->listed_color = static_cast<int>(depths.size());
+  return source;
+}
+
+InMemoryFrameSource::InMemoryFrameSource(CameraFile camera, std::vector<RgbdFrame> frames)
+    : camera_(camera), frames_(std::move(frames)) {}
+
+bool InMemoryFrameSource::Next(RgbdFrame* frame) {
+  if (next_ >= frames_.size()) return false;
+  *frame = frames_[next_++];
+  return true;
+}
+
+std::string DetectInputKind(const std::string& input) {
+  if (IsDirectory(input)) {
+    const fs::path p(input);
+    if (IsRegularFile((p / "rgb.txt").string()) && IsRegularFile((p / "depth.txt").string()))
+      return "tum";
+    const bool has_color = !FirstExistingDir(input, {"image", "color", "rgb"}).empty();
+    const bool has_depth = !FirstExistingDir(input, {"depth", "depth_noisy"}).empty();
+    if (has_color && has_depth) return "redwood";
+  }
+  return {};
+}
+
+std::unique_ptr<FrameSource> OpenFrameSource(const std::string& input,
+                                             const FrameSourceOptions& options) {
+  std::string problem;
+  if (!options.Check(&problem)) throw InputError(input, "bad frame source options: " + problem);
+  if (!fs::exists(input)) throw InputError(input, "no such file or folder");
+  const std::string kind = DetectInputKind(input);
+  if (kind == "tum") return OpenTumFolder(input, options);
+  if (kind == "redwood") return OpenRedwoodFolder(input, options);
+  throw InputError(input,
+                   "unrecognised input: expected a TUM folder (rgb.txt, depth.txt) or a Redwood "
+                   "folder (image/ or color/, depth/)");
+}
+
+}  // namespace gf

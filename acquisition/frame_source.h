@@ -1,0 +1,132 @@
+// FrameSource: one interface for every way RGB-D frames arrive (dataset folders, recordings,
+// live devices), and the folder readers for TUM RGB-D and Redwood / Open3D layouts.
+//
+// Usage:
+//   gf::FrameSourceOptions options;
+//   std::unique_ptr<gf::FrameSource> source = gf::OpenFrameSource("tum_fr1_xyz_head", options);
+//   gf::RgbdFrame frame;
+//   while (source->Next(&frame)) { ... frame.depth (metres), frame.hole_mask ... }
+//
+// Errors: OpenFrameSource and Next throw InputError("<file>: <problem>") for unreadable or
+// inconsistent input (missing index, undecodable image, wrong bit depth, size mismatch).
+// Thread-safety: a source is used from one thread at a time.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "acquisition/camera.h"
+#include "acquisition/depth.h"
+#include "acquisition/rgbd_frame.h"
+
+namespace gf {
+
+struct FrameSourceOptions {
+  bool load_color = true;                // false: frames carry depth only (faster, e.g. for info)
+  DepthConversionOptions depth;          // sensor range used to classify holes
+  double max_association_dt_s = 0.02;    // TUM colour/depth association window, seconds
+  std::string camera_file;               // overrides <folder>/camera.json when not empty
+  std::string depth_folder;              // Redwood: depth subfolder; empty = depth/ or depth_noisy/
+  bool Check(std::string* message = nullptr) const;
+};
+
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  // "tum", "redwood", "memory", ...
+  virtual std::string Kind() const = 0;
+  // What was opened (folder, file or device URI).
+  virtual std::string Input() const = 0;
+  virtual const CameraFile& camera_file() const = 0;
+  const Camera& camera() const { return camera_file().camera; }
+  virtual DepthConvention depth_convention() const = 0;
+  // Number of frames Next() will deliver, when known in advance (not for live devices).
+  virtual std::optional<int> FrameCount() const = 0;
+  // Fills *frame with the next frame; false at the end of the input.
+  virtual bool Next(RgbdFrame* frame) = 0;
+};
+
+// One frame of a folder dataset before its images are read.
+struct FolderFrameEntry {
+  double timestamp = 0;
+  std::string timestamp_text;
+  double color_timestamp = 0;
+  std::string color_path;
+  std::string depth_path;
+};
+
+// A dataset folder as a list of entries; loads the images of one entry per Next().
+class FolderFrameSource : public FrameSource {
+ public:
+  FolderFrameSource(std::string kind, std::string input, CameraFile camera,
+                    DepthConvention convention, std::vector<FolderFrameEntry> entries,
+                    FrameSourceOptions options);
+  std::string Kind() const override { return kind_; }
+  std::string Input() const override { return input_; }
+  const CameraFile& camera_file() const override { return camera_; }
+  DepthConvention depth_convention() const override { return convention_; }
+  std::optional<int> FrameCount() const override { return static_cast<int>(entries_.size()); }
+  bool Next(RgbdFrame* frame) override;
+
+  const std::vector<FolderFrameEntry>& entries() const { return entries_; }
+  // Frames that the index listed but could not pair (e.g. depth without colour within 20 ms).
+  int unmatched_depth = 0;
+  int unmatched_color = 0;
+  int listed_depth = 0;
+  int listed_color = 0;
+
+ private:
+  std::string kind_;
+  std::string input_;
+  CameraFile camera_;
+  DepthConvention convention_;
+  std::vector<FolderFrameEntry> entries_;
+  FrameSourceOptions options_;
+  size_t next_ = 0;
+};
+
+// TUM RGB-D folder: rgb.txt and depth.txt ("timestamp filename" lines, # comments), camera.json.
+// Colour and depth are associated one-to-one by nearest timestamp within max_association_dt_s, as
+// TUM's associate.py does; unmatched frames are dropped and counted (and logged).
+std::unique_ptr<FolderFrameSource> OpenTumFolder(const std::string& folder,
+                                                 const FrameSourceOptions& options);
+// Redwood / Open3D folder: image/ or color/ (or rgb/) and depth/ with files paired by sorted name.
+std::unique_ptr<FolderFrameSource> OpenRedwoodFolder(const std::string& folder,
+                                                     const FrameSourceOptions& options);
+
+// Frames held in memory: for tests and for piping one stage's output into another.
+class InMemoryFrameSource : public FrameSource {
+ public:
+  InMemoryFrameSource(CameraFile camera, std::vector<RgbdFrame> frames);
+  std::string Kind() const override { return "memory"; }
+  std::string Input() const override { return "memory"; }
+  const CameraFile& camera_file() const override { return camera_; }
+  DepthConvention depth_convention() const override {
+    return DepthConvention::FromDepthScale(camera_.depth_scale);
+  }
+  std::optional<int> FrameCount() const override { return static_cast<int>(frames_.size()); }
+  bool Next(RgbdFrame* frame) override;
+
+ private:
+  CameraFile camera_;
+  std::vector<RgbdFrame> frames_;
+  size_t next_ = 0;
+};
+
+// What kind of input a path is: "tum", "redwood", or "" when unrecognised.
+std::string DetectInputKind(const std::string& input);
+
+// Opens any supported input, detected from what it is. Throws InputError naming the input when it
+// is missing or of no known kind.
+std::unique_ptr<FrameSource> OpenFrameSource(const std::string& input,
+                                             const FrameSourceOptions& options);
+
+// Pairs two sorted timestamp lists one-to-one by nearest time within max_dt (associate.py):
+// returns (index_a, index_b) pairs sorted by index_a.
+std::vector<std::pair<size_t, size_t>> AssociateTimestamps(const std::vector<double>& a,
+                                                           const std::vector<double>& b,
+                                                           double max_dt);
+
+}  // namespace gf

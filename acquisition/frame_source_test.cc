@@ -1,0 +1,181 @@
+#include "acquisition/frame_source.h"
+
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "acquisition/errors.h"
+#include "tests/testing.h"
+
+namespace gf {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(AssociateTimestamps, PairsOneToOneWithinTheWindow) {
+  const std::vector<double> depth = {0.000, 0.033, 0.066, 0.100, 0.500};
+  const std::vector<double> color = {0.010, 0.030, 0.070, 0.300};
+  const auto pairs = AssociateTimestamps(depth, color, 0.02);
+  // 0.033 takes 0.030 (3 ms) before 0.000 could; 0.000 then takes 0.010; 0.066 takes 0.070;
+  // 0.100 and 0.500 have nothing within 20 ms.
+  ASSERT_EQ(pairs.size(), 3u);
+  EXPECT_EQ(pairs[0], (std::pair<size_t, size_t>(0, 0)));
+  EXPECT_EQ(pairs[1], (std::pair<size_t, size_t>(1, 1)));
+  EXPECT_EQ(pairs[2], (std::pair<size_t, size_t>(2, 2)));
+}
+
+TEST(TumFolder, ReadsAllFramesOfTheHeadSequence) {
+  GF_REQUIRE_DATASET(tum, "tum_fr1_xyz_head");
+  auto source = OpenFrameSource(tum, {});
+  EXPECT_EQ(source->Kind(), "tum");
+  // 150 depth and 150 colour images; as TUM's associate.py (20 ms), 144 pairs (checked in Python).
+  EXPECT_EQ(source->FrameCount().value(), 144);
+  auto* folder = dynamic_cast<FolderFrameSource*>(source.get());
+  ASSERT_NE(folder, nullptr);
+  EXPECT_EQ(folder->listed_depth, 150);
+  EXPECT_EQ(folder->unmatched_depth, 6);
+  EXPECT_DOUBLE_EQ(source->camera().fx, 517.3);
+  EXPECT_EQ(source->depth_convention(), DepthConvention::ScaledUnits(5000));
+  RgbdFrame frame;
+  int count = 0;
+  double previous = 0;
+  while (source->Next(&frame)) {
+    if (count == 0) {
+      EXPECT_EQ(frame.timestamp_text, "1305031102.160407");
+      EXPECT_NEAR(frame.color_timestamp, 1305031102.175304, 1e-6);
+    }
+    EXPECT_GT(frame.timestamp, previous);
+    EXPECT_LT(std::abs(frame.color_timestamp - frame.timestamp), 0.02);
+    previous = frame.timestamp;
+    ASSERT_EQ(frame.depth.type(), CV_32FC1);
+    ASSERT_EQ(frame.color.type(), CV_8UC3);
+    EXPECT_EQ(frame.color.size(), cv::Size(640, 480));
+    // Desk scene: valid depth between 0.5 and 5 m; hole mask agrees with zero depth.
+    cv::Mat valid = frame.hole_mask == 0;
+    double lo, hi;
+    cv::minMaxLoc(frame.depth, &lo, &hi, nullptr, nullptr, valid);
+    EXPECT_GT(lo, 0.5);
+    EXPECT_LT(hi, 5.0);
+    EXPECT_EQ(cv::countNonZero(frame.depth == 0), cv::countNonZero(~valid));
+    ++count;
+    if (count == 5) break;  // reading all 150 colour images adds nothing here
+  }
+  EXPECT_EQ(count, 5);
+}
+
+TEST(RedwoodFolder, ReadsIclMicroAndNoisyDepth) {
+  GF_REQUIRE_DATASET(icl, "icl_livingroom1_micro");
+  auto source = OpenFrameSource(icl, {});
+  EXPECT_EQ(source->Kind(), "redwood");
+  EXPECT_EQ(source->FrameCount().value(), 211);
+  EXPECT_EQ(source->depth_convention(), DepthConvention::Millimetres());
+  RgbdFrame frame;
+  ASSERT_TRUE(source->Next(&frame));
+  EXPECT_EQ(frame.timestamp_text, "0");
+
+  GF_REQUIRE_DATASET(noisy, "icl_livingroom1_noisy5");
+  FrameSourceOptions options;
+  options.load_color = false;
+  auto noisy_source = OpenFrameSource(noisy, options);  // picks depth_noisy/
+  HoleStats stats;
+  while (noisy_source->Next(&frame)) stats += CountHoles(frame.hole_mask);
+  EXPECT_EQ(stats.pixels, 5u * 640 * 480);
+  EXPECT_NEAR(stats.Fraction(), 0.127, 0.01);
+  options.depth_folder = "depth_clean";
+  auto clean_source = OpenFrameSource(noisy, options);
+  HoleStats clean;
+  while (clean_source->Next(&frame)) clean += CountHoles(frame.hole_mask);
+  EXPECT_LT(clean.Fraction(), stats.Fraction());
+}
+
+// A small TUM folder written here, for the failure cases.
+class TinyTum : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    fs::create_directories(dir_ / "rgb");
+    fs::create_directories(dir_ / "depth");
+    std::ofstream(dir_ / "camera.json")
+        << R"({"width": 8, "height": 6, "fx": 10, "fy": 10, "cx": 3.5, "cy": 2.5,
+               "distortion": [0,0,0,0,0], "depth_scale": 5000})";
+    std::ofstream(dir_ / "rgb.txt") << "# color\n1.000 rgb/1.png\n2.000 rgb/2.png\n";
+    std::ofstream(dir_ / "depth.txt") << "# depth\n1.005 depth/1.png\n2.010 depth/2.png\n";
+    cv::imwrite(dir_ / "rgb/1.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(10, 20, 30)));
+    cv::imwrite(dir_ / "rgb/2.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(10, 20, 30)));
+    cv::imwrite(dir_ / "depth/1.png", cv::Mat(6, 8, CV_16UC1, cv::Scalar(5000)));
+    cv::imwrite(dir_ / "depth/2.png", cv::Mat(6, 8, CV_16UC1, cv::Scalar(0)));
+  }
+  // Reads every frame; returns the error message or "".
+  std::string ReadAll() {
+    try {
+      auto source = OpenFrameSource(dir_.path(), {});
+      RgbdFrame f;
+      while (source->Next(&f)) {
+      }
+      return "";
+    } catch (const InputError& e) {
+      return e.what();
+    }
+  }
+  testing::TempDir dir_;
+};
+
+TEST_F(TinyTum, ReadsBothFrames) {
+  EXPECT_EQ(ReadAll(), "");
+  auto source = OpenFrameSource(dir_.path(), {});
+  RgbdFrame f;
+  ASSERT_TRUE(source->Next(&f));
+  EXPECT_FLOAT_EQ(f.depth.at<float>(0, 0), 1.0f);
+  ASSERT_TRUE(source->Next(&f));
+  EXPECT_EQ(CountHoles(f.hole_mask).no_return, 48u);
+  EXPECT_FALSE(source->Next(&f));
+}
+
+TEST_F(TinyTum, MissingIndexNamesTheFile) {
+  fs::remove(dir_ / "depth.txt");
+  try {
+    OpenTumFolder(dir_.path(), {});
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), (dir_ / "depth.txt") + ": file not found");
+  }
+  // Nothing left that identifies the folder: the error names the input.
+  fs::remove_all(dir_ / "rgb");
+  const std::string message = ReadAll();
+  EXPECT_NE(message.find(dir_.path() + ": unrecognised input"), std::string::npos) << message;
+}
+
+TEST_F(TinyTum, CorruptColourImageNamesTheFile) {
+  std::ofstream(dir_ / "rgb/2.png", std::ios::trunc) << "not a png";
+  const std::string message = ReadAll();
+  EXPECT_NE(message.find("rgb/2.png: cannot decode"), std::string::npos) << message;
+}
+
+TEST_F(TinyTum, MismatchedSizesAndBitDepthAreReported) {
+  cv::imwrite(dir_ / "depth/2.png", cv::Mat(3, 4, CV_16UC1, cv::Scalar(0)));
+  EXPECT_NE(ReadAll().find("depth/2.png: depth image is 4x3 but the camera is 8x6"),
+            std::string::npos);
+  cv::imwrite(dir_ / "depth/2.png", cv::Mat(6, 8, CV_8UC1, cv::Scalar(0)));
+  EXPECT_NE(ReadAll().find("depth/2.png: depth image is 8-bit, expected 16-bit"),
+            std::string::npos);
+  cv::imwrite(dir_ / "depth/2.png", cv::Mat(6, 8, CV_16UC1, cv::Scalar(0)));
+  cv::imwrite(dir_ / "rgb/2.png", cv::Mat(5, 8, CV_8UC3, cv::Scalar(0)));
+  EXPECT_NE(ReadAll().find("rgb/2.png: colour image is 8x5"), std::string::npos) << ReadAll();
+}
+
+TEST(InMemoryFrameSource, DeliversFramesInOrder) {
+  std::vector<RgbdFrame> frames(3);
+  for (int i = 0; i < 3; ++i) frames[i].index = i;
+  InMemoryFrameSource source(CameraFile{}, frames);
+  EXPECT_EQ(source.FrameCount().value(), 3);
+  RgbdFrame f;
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_TRUE(source.Next(&f));
+    EXPECT_EQ(f.index, i);
+  }
+  EXPECT_FALSE(source.Next(&f));
+}
+
+}  // namespace
+}  // namespace gf

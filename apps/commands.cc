@@ -1,0 +1,61 @@
+#include "apps/commands.h"
+
+#include <iostream>
+
+#include "apps/demo.h"
+#include "apps/info.h"
+#include "apps/progress.h"
+
+namespace gf {
+namespace {
+
+// Options every command that reads an INPUT shares.
+struct InputArgs {
+  std::string input;
+  std::string camera_file;
+  std::string depth_folder;
+  FrameSourceOptions ToOptions() const {
+    FrameSourceOptions o;
+    o.camera_file = camera_file;
+    o.depth_folder = depth_folder;
+    return o;
+  }
+};
+
+void AddInputArgs(CLI::App* cmd, InputArgs* args) {
+  cmd->add_option("INPUT", args->input,
+                  "TUM folder (rgb.txt, depth.txt) or Redwood folder (image/ or color/, depth/)")
+      ->required();
+  cmd->add_option("--camera", args->camera_file, "camera.json to use instead of INPUT/camera.json");
+  cmd->add_option("--depth-dir", args->depth_folder,
+                  "Redwood: depth subfolder (default depth/, else depth_noisy/)");
+}
+
+}  // namespace
+
+void RegisterCommands(CLI::App& app) {
+  {
+    auto args = std::make_shared<InputArgs>();
+    CLI::App* cmd = app.add_subcommand(
+        "info", "print JSON about INPUT: source kind, frames, size, intrinsics, depth convention, "
+                "hole fraction");
+    AddInputArgs(cmd, args.get());
+    cmd->callback([args] {
+      TerminalProgress progress("info", std::nullopt);
+      const auto info = InputInfo(args->input, args->ToOptions(),
+                                  [&](int done, int) { progress.Update(done); });
+      progress.Finish();
+      std::cout << info.dump(2) << std::endl;
+    });
+  }
+  {
+    auto out = std::make_shared<std::string>("demo-out");
+    auto data = std::make_shared<std::string>();
+    CLI::App* cmd = app.add_subcommand("demo", "run the built-in demo and write OUT/report.html");
+    cmd->add_option("--out", *out, "output folder")->capture_default_str();
+    cmd->add_option("--data", *data, "folder of datasets to summarise (default ../shared/datasets)");
+    cmd->callback([out, data] { RunDemo(*out, *data); });
+  }
+}
+
+}  // namespace gf

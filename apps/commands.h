@@ -1,0 +1,11 @@
+// Registers every `glassfusion` subcommand on the CLI11 app. Each subcommand's callback runs the
+// command and throws gf::InputError on bad input (main turns that into exit code 2).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace gf {
+
+void RegisterCommands(CLI::App& app);
+
+}  // namespace gf

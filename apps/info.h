@@ -1,0 +1,18 @@
+// `glassfusion info INPUT`: what an input holds, as JSON (DESIGN.md: source kind, frames, size,
+// intrinsics, depth convention, hole fraction). Reads every depth frame to measure holes.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "acquisition/frame_source.h"
+
+namespace gf {
+
+// progress(done, total) is called after each frame. Throws InputError on bad input.
+nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions options,
+                                 const std::function<void(int done, int total)>& progress = {});
+
+}  // namespace gf

@@ -1,0 +1,38 @@
+// The `glassfusion` command line: subcommand dispatch (DESIGN.md, "Command line contract").
+//
+// Exit codes: 0 success, 1 internal error, 2 bad input or usage (one line "error: <file>: <problem>").
+#include <cstdio>
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "acquisition/errors.h"
+#include "apps/commands.h"
+
+int main(int argc, char** argv) {
+  spdlog::set_pattern("[%l] %v");
+  spdlog::set_level(spdlog::level::warn);
+  CLI::App app{
+      "GlassFusion: RGB-D scanning of scenes with glass and shiny objects; fills depth holes with "
+      "stereo between keyframes."};
+  app.require_subcommand(1);
+  bool verbose = false;
+  app.add_flag("-v,--verbose", verbose, "log progress details");
+  app.parse_complete_callback([&] {
+    if (verbose) spdlog::set_level(spdlog::level::debug);
+  });
+  gf::RegisterCommands(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  } catch (const gf::InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "internal error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

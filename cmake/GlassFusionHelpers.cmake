@@ -1,0 +1,48 @@
+# Small helpers so each module's CMakeLists.txt stays a few lines.
+#
+# gf_add_library(NAME
+#                [SOURCES a.cc b.cc ...]
+#                [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
+#   Builds library gf_<NAME> (alias gf::<NAME>) from the module folder. The include root is the
+#   repository root, so headers are included as "acquisition/camera.h". A module with no sources yet
+#   becomes an INTERFACE library that only carries its dependencies.
+#
+# gf_add_test(MODULE NAME SOURCES a_test.cc ... [LIBS ...])
+#   Builds a GoogleTest executable and registers its tests as MODULE/NAME so that
+#   `ctest -R MODULE/` runs one module.
+
+function(gf_add_library NAME)
+  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
+  set(target gf_${NAME})
+  if(ARG_SOURCES)
+    add_library(${target} STATIC ${ARG_SOURCES})
+    target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR})
+    target_link_libraries(${target} PUBLIC ${ARG_PUBLIC_LIBS} PRIVATE ${ARG_PRIVATE_LIBS})
+    target_compile_features(${target} PUBLIC cxx_std_17)
+    target_compile_options(${target} PRIVATE ${GF_WARNING_FLAGS})
+  else()
+    add_library(${target} INTERFACE)
+    target_include_directories(${target} INTERFACE ${PROJECT_SOURCE_DIR})
+    target_link_libraries(${target} INTERFACE ${ARG_PUBLIC_LIBS})
+  endif()
+  add_library(gf::${NAME} ALIAS ${target})
+endfunction()
+
+function(gf_add_test MODULE NAME)
+  if(NOT GF_BUILD_TESTS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS" ${ARGN})
+  set(target ${MODULE}_${NAME})
+  add_executable(${target} ${ARG_SOURCES})
+  target_link_libraries(${target} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main)
+  target_compile_options(${target} PRIVATE ${GF_WARNING_FLAGS})
+  # Tests find optional real data through this path and GTEST_SKIP() when it is absent.
+  target_compile_definitions(${target} PRIVATE
+    GF_SHARED_DATASETS="${GF_SHARED_DATASETS}"
+    GF_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  gtest_discover_tests(${target}
+    TEST_PREFIX "${MODULE}/${NAME}."
+    DISCOVERY_TIMEOUT 60
+    PROPERTIES LABELS ${MODULE})
+endfunction()

@@ -1,0 +1,38 @@
+# End-to-end: bad input ends in one line "error: <file>: <problem>" and exit code 2, no crash.
+set(tmp "${CMAKE_CURRENT_BINARY_DIR}/cli_bad_input_tmp")
+file(REMOVE_RECURSE "${tmp}")
+file(MAKE_DIRECTORY "${tmp}/rgb" "${tmp}/depth")
+
+function(expect_error expected_regex)
+  execute_process(COMMAND "${GLASSFUSION}" ${ARGN}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  string(STRIP "${err}" err)
+  if(NOT rc EQUAL 2)
+    message(FATAL_ERROR "glassfusion ${ARGN}: expected exit code 2, got ${rc}: ${err}")
+  endif()
+  if(NOT err MATCHES "${expected_regex}")
+    message(FATAL_ERROR "glassfusion ${ARGN}: message '${err}' does not match '${expected_regex}'")
+  endif()
+  string(FIND "${err}" "\n" newline)
+  if(NOT newline EQUAL -1)
+    message(FATAL_ERROR "glassfusion ${ARGN}: error is not one line: '${err}'")
+  endif()
+endfunction()
+
+expect_error("^error: /nonexistent/input: no such file or folder$" info /nonexistent/input)
+# A TUM folder whose depth.txt lists a file that is not there.
+file(WRITE "${tmp}/rgb.txt" "1.0 rgb/1.png\n")
+file(WRITE "${tmp}/depth.txt" "1.0 depth/1.png\n")
+file(WRITE "${tmp}/camera.json"
+     "{\"width\": 8, \"height\": 6, \"fx\": 10, \"fy\": 10, \"cx\": 3.5, \"cy\": 2.5, \"depth_scale\": 5000}")
+expect_error("^error: .*depth/1.png: file not found$" info "${tmp}")
+# A corrupt camera.json.
+file(WRITE "${tmp}/camera.json" "{ broken")
+expect_error("^error: .*camera.json: not valid JSON" info "${tmp}")
+# A depth "PNG" that is not an image.
+file(WRITE "${tmp}/camera.json"
+     "{\"width\": 8, \"height\": 6, \"fx\": 10, \"fy\": 10, \"cx\": 3.5, \"cy\": 2.5, \"depth_scale\": 5000}")
+file(WRITE "${tmp}/depth/1.png" "garbage")
+expect_error("^error: .*depth/1.png: cannot decode depth image" info "${tmp}")
+file(REMOVE_RECURSE "${tmp}")
+message("bad input handled")

@@ -1,0 +1,47 @@
+// Helpers shared by GlassFusion tests (header-only, tests only).
+#pragma once
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace gf::testing {
+
+// Path of a folder in ../shared/datasets, or "" when the datasets are not on this machine.
+inline std::string SharedDataset(const std::string& name) {
+  const std::filesystem::path p = std::filesystem::path(GF_SHARED_DATASETS) / name;
+  return std::filesystem::exists(p) ? p.string() : std::string();
+}
+
+// A fresh empty folder under the system temp dir, removed when the object goes away.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string("gf-") + (info ? info->name() : "test") + "-";
+    path_ = std::filesystem::temp_directory_path() / (name + std::to_string(::getpid()) + "-" +
+                                                      std::to_string(counter_++));
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  std::string path() const { return path_.string(); }
+  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  static inline int counter_ = 0;
+  std::filesystem::path path_;
+};
+
+}  // namespace gf::testing
+
+// Skips the test (never passes silently) when a dataset of ../shared/datasets is absent.
+#define GF_REQUIRE_DATASET(var, name)                                             \
+  const std::string var = ::gf::testing::SharedDataset(name);                      \
+  if (var.empty()) GTEST_SKIP() << "dataset " << name << " not found under " GF_SHARED_DATASETS
