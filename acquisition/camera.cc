@@ -2,9 +2,8 @@
 
 #include <cmath>
 #include <fstream>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
@@ -127,7 +126,8 @@ CameraFile LoadCameraFile(const std::string& path) {
   if (j.contains("distortion")) {
     const auto& d = j["distortion"];
     if (!d.is_array() || d.size() > 5)
-      throw InputError(path, "\"distortion\" must be an array of at most 5 numbers [k1,k2,p1,p2,k3]");
+      throw InputError(path,
+                       "\"distortion\" must be an array of at most 5 numbers [k1,k2,p1,p2,k3]");
     for (size_t i = 0; i < d.size(); ++i) {
       if (!d[i].is_number()) throw InputError(path, "\"distortion\" must hold numbers only");
       c.distortion[i] = d[i].get<double>();

@@ -18,17 +18,16 @@
 // Thread-safety: Camera is a value type; const methods are safe to call concurrently.
 #pragma once
 
-#include <array>
-#include <string>
-
 #include <Eigen/Core>
+#include <array>
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace gf {
 
 struct Camera {
-  int width = 640;   // image width, pixels
-  int height = 480;  // image height, pixels
+  int width = 640;    // image width, pixels
+  int height = 480;   // image height, pixels
   double fx = 525.0;  // focal length along x, pixels
   double fy = 525.0;  // focal length along y, pixels
   double cx = 319.5;  // principal point x, pixels
@@ -59,8 +58,8 @@ struct Camera {
   }
 
   Eigen::Matrix3d K() const;
-  cv::Mat CvK() const;             // 3x3 CV_64F
-  cv::Mat CvDistortion() const;    // 1x5 CV_64F
+  cv::Mat CvK() const;           // 3x3 CV_64F
+  cv::Mat CvDistortion() const;  // 1x5 CV_64F
   // The same camera for an image scaled by `factor` (e.g. 0.5 for a pyramid level).
   Camera Scaled(double factor) const;
 };

@@ -1,10 +1,10 @@
 #include "acquisition/camera.h"
 
-#include <fstream>
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <fstream>
 #include <opencv2/calib3d.hpp>
+#include <random>
 
 #include "acquisition/errors.h"
 #include "tests/testing.h"
@@ -22,9 +22,7 @@ Camera TumFr1() {
   return c;
 }
 
-void WriteText(const std::string& path, const std::string& text) {
-  std::ofstream(path) << text;
-}
+void WriteText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
 
 TEST(Camera, LoadsTheTumCameraJson) {
   GF_REQUIRE_DATASET(tum, "tum_fr1_xyz_head");
@@ -78,7 +76,8 @@ TEST(Camera, BadFilesGiveOneLineErrorsNamingFileAndProblem) {
   expect_error(R"({"width": 640, "height": 480, "fx": 525, "fy": 525, "cx": 319.5})", "\"cy\"");
   expect_error(R"({"width": 640, "height": 480, "fx": -5, "fy": 525, "cx": 1, "cy": 1})", "focal");
   expect_error(R"({"width": 640, "height": 480, "fx": 5, "fy": 5, "cx": 1, "cy": 1,
-                   "depth_scale": 0})", "depth_scale");
+                   "depth_scale": 0})",
+               "depth_scale");
   expect_error(R"({"width": "640", "height": 480, "fx": 5, "fy": 5, "cx": 1, "cy": 1})", "number");
   EXPECT_THROW(LoadCameraFile(dir / "missing.json"), InputError);
 }

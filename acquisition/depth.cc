@@ -150,10 +150,17 @@ HoleStats CountHoles(const cv::Mat& hole_mask) {
     const uint8_t* h = hole_mask.ptr<uint8_t>(y);
     for (int x = 0; x < hole_mask.cols; ++x) {
       switch (static_cast<HoleCode>(h[x])) {
-        case HoleCode::kNoReturn: ++s.no_return; break;
-        case HoleCode::kOutOfRange: ++s.out_of_range; break;
-        case HoleCode::kShadow: ++s.shadow; break;
-        default: break;
+        case HoleCode::kNoReturn:
+          ++s.no_return;
+          break;
+        case HoleCode::kOutOfRange:
+          ++s.out_of_range;
+          break;
+        case HoleCode::kShadow:
+          ++s.shadow;
+          break;
+        default:
+          break;
       }
     }
   }

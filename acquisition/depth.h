@@ -20,9 +20,8 @@
 #pragma once
 
 #include <cstdint>
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace gf {
 
@@ -39,8 +38,8 @@ class DepthConvention {
   enum class Kind { kMillimetres, kScaledUnits, kKinectV1Raw11Bit };
 
   // Kinect v1 disparity model constants (see the file comment).
-  static constexpr double kKinectA = -0.0030711016;  // 1/metres per disparity unit
-  static constexpr double kKinectB = 3.3309495161;   // 1/metres
+  static constexpr double kKinectA = -0.0030711016;   // 1/metres per disparity unit
+  static constexpr double kKinectB = 3.3309495161;    // 1/metres
   static constexpr uint16_t kKinectNoReturn = 0x7FF;  // 2047
 
   static DepthConvention Millimetres() { return DepthConvention(Kind::kMillimetres, 1000.0); }
@@ -71,7 +70,8 @@ class DepthConvention {
   }
 
  private:
-  DepthConvention(Kind kind, double units_per_metre) : kind_(kind), units_per_metre_(units_per_metre) {}
+  DepthConvention(Kind kind, double units_per_metre)
+      : kind_(kind), units_per_metre_(units_per_metre) {}
   Kind kind_;
   double units_per_metre_;
 };

@@ -1,8 +1,8 @@
 #include "acquisition/depth.h"
 
-#include <fstream>
-
 #include <gtest/gtest.h>
+
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "acquisition/errors.h"

@@ -3,7 +3,8 @@
 // DESIGN.md names three kinds of failure:
 //  - bad configuration: an Options struct's Check() returns false with a message;
 //  - broken precondition (a programming error): GF_CHECK throws std::logic_error with file:line;
-//  - bad user input (missing file, corrupt image, wrong depth scale ...): InputError, whose message is
+//  - bad user input (missing file, corrupt image, wrong depth scale ...): InputError, whose message
+//  is
 //    one line "<file>: <problem>". The command line prints it and exits with code 2.
 // Expected algorithmic failures (tracking lost, too few inliers) are statuses in result structs,
 // never exceptions.
@@ -34,7 +35,7 @@ namespace internal {
 }  // namespace gf
 
 // Precondition check for programming errors; throws std::logic_error naming file:line.
-#define GF_CHECK(condition, message)                                               \
-  do {                                                                             \
+#define GF_CHECK(condition, message)                                                      \
+  do {                                                                                    \
     if (!(condition)) ::gf::internal::FailCheck(#condition, __FILE__, __LINE__, message); \
   } while (0)

@@ -1,12 +1,12 @@
 #include "acquisition/file_util.h"
 
+#include <unistd.h>
+
 #include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <system_error>
-
-#include <unistd.h>
 
 #include "acquisition/errors.h"
 
@@ -31,11 +31,10 @@ void WriteFileAtomically(const std::string& path,
   static std::atomic<unsigned> counter{0};
   const fs::path final_path(path);
   // Keep the extension last: writers such as cv::imwrite choose the format from it.
-  const std::string temporary =
-      (final_path.parent_path() /
-       (".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + "-" +
-        final_path.filename().string()))
-          .string();
+  const std::string temporary = (final_path.parent_path() /
+                                 (".tmp-" + std::to_string(::getpid()) + "-" +
+                                  std::to_string(counter++) + "-" + final_path.filename().string()))
+                                    .string();
   try {
     write(temporary);
   } catch (...) {

@@ -1,11 +1,11 @@
 #include "acquisition/frame_source.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
-
-#include <spdlog/spdlog.h>
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
@@ -37,7 +37,8 @@ std::vector<IndexLine> ReadTumIndex(const std::string& folder, const std::string
     IndexLine entry;
     std::string file;
     if (!(fields >> entry.timestamp_text >> file))
-      throw InputError(path, "line " + std::to_string(number) + ": expected \"timestamp filename\"");
+      throw InputError(path,
+                       "line " + std::to_string(number) + ": expected \"timestamp filename\"");
     try {
       size_t used = 0;
       entry.timestamp = std::stod(entry.timestamp_text, &used);
@@ -50,14 +51,15 @@ std::vector<IndexLine> ReadTumIndex(const std::string& folder, const std::string
     lines.push_back(entry);
   }
   if (lines.empty()) throw InputError(path, "index lists no images");
-  std::stable_sort(lines.begin(), lines.end(),
-                   [](const IndexLine& a, const IndexLine& b) { return a.timestamp < b.timestamp; });
+  std::stable_sort(lines.begin(), lines.end(), [](const IndexLine& a, const IndexLine& b) {
+    return a.timestamp < b.timestamp;
+  });
   return lines;
 }
 
 CameraFile LoadFolderCamera(const std::string& folder, const FrameSourceOptions& options) {
-  const std::string path =
-      options.camera_file.empty() ? (fs::path(folder) / "camera.json").string() : options.camera_file;
+  const std::string path = options.camera_file.empty() ? (fs::path(folder) / "camera.json").string()
+                                                       : options.camera_file;
   if (!IsRegularFile(path))
     throw InputError(path, "camera intrinsics not found (add camera.json or pass --camera FILE)");
   return LoadCameraFile(path);
@@ -198,8 +200,8 @@ std::unique_ptr<FolderFrameSource> OpenTumFolder(const std::string& folder,
                      "no depth frame has a colour frame within " +
                          std::to_string(options.max_association_dt_s * 1000) + " ms");
   auto source = std::make_unique<FolderFrameSource>(
-      "tum", folder, camera, DepthConvention::FromDepthScale(camera.depth_scale), std::move(entries),
-      options);
+      "tum", folder, camera, DepthConvention::FromDepthScale(camera.depth_scale),
+      std::move(entries), options);
   source->listed_depth = static_cast<int>(depth.size());
   source->listed_color = static_cast<int>(color.size());
   source->unmatched_depth = static_cast<int>(depth.size() - pairs.size());

@@ -24,11 +24,11 @@
 namespace gf {
 
 struct FrameSourceOptions {
-  bool load_color = true;                // false: frames carry depth only (faster, e.g. for info)
-  DepthConversionOptions depth;          // sensor range used to classify holes
-  double max_association_dt_s = 0.02;    // TUM colour/depth association window, seconds
-  std::string camera_file;               // overrides <folder>/camera.json when not empty
-  std::string depth_folder;              // Redwood: depth subfolder; empty = depth/ or depth_noisy/
+  bool load_color = true;              // false: frames carry depth only (faster, e.g. for info)
+  DepthConversionOptions depth;        // sensor range used to classify holes
+  double max_association_dt_s = 0.02;  // TUM colour/depth association window, seconds
+  std::string camera_file;             // overrides <folder>/camera.json when not empty
+  std::string depth_folder;            // Redwood: depth subfolder; empty = depth/ or depth_noisy/
   bool Check(std::string* message = nullptr) const;
 };
 

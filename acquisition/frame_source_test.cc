@@ -1,9 +1,9 @@
 #include "acquisition/frame_source.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "acquisition/errors.h"

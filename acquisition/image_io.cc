@@ -2,10 +2,9 @@
 
 #include <cctype>
 #include <fstream>
-#include <sstream>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
@@ -45,10 +44,14 @@ bool NextToken(std::istream& in, std::string* token) {
 
 const char* DepthTypeName(int type) {
   switch (CV_MAT_DEPTH(type)) {
-    case CV_8U: return "8-bit";
-    case CV_16U: return "16-bit";
-    case CV_32F: return "32-bit float";
-    default: return "unsupported";
+    case CV_8U:
+      return "8-bit";
+    case CV_16U:
+      return "16-bit";
+    case CV_32F:
+      return "32-bit float";
+    default:
+      return "unsupported";
   }
 }
 
@@ -59,11 +62,14 @@ cv::Mat ReadColorImage(const std::string& path) {
   cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
   if (image.empty()) throw InputError(path, "cannot decode image (corrupt or unsupported format)");
   if (image.depth() != CV_8U)
-    throw InputError(path, std::string("colour image is ") + DepthTypeName(image.type()) +
-                               ", expected 8-bit");
-  if (image.channels() == 1) cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);
-  else if (image.channels() == 4) cv::cvtColor(image, image, cv::COLOR_BGRA2BGR);
-  else if (image.channels() != 3) throw InputError(path, "colour image must have 1, 3 or 4 channels");
+    throw InputError(
+        path, std::string("colour image is ") + DepthTypeName(image.type()) + ", expected 8-bit");
+  if (image.channels() == 1)
+    cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);
+  else if (image.channels() == 4)
+    cv::cvtColor(image, image, cv::COLOR_BGRA2BGR);
+  else if (image.channels() != 3)
+    throw InputError(path, "colour image must have 1, 3 or 4 channels");
   return image;
 }
 
@@ -71,13 +77,14 @@ cv::Mat ReadDepthImage(const std::string& path) {
   RequireFile(path);
   if (HasExtension(path, ".pgm")) return ReadPgm16(path);
   cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (image.empty()) throw InputError(path, "cannot decode depth image (corrupt or unsupported format)");
+  if (image.empty())
+    throw InputError(path, "cannot decode depth image (corrupt or unsupported format)");
   if (image.channels() != 1)
-    throw InputError(path, "depth image has " + std::to_string(image.channels()) +
-                               " channels, expected 1");
+    throw InputError(
+        path, "depth image has " + std::to_string(image.channels()) + " channels, expected 1");
   if (image.depth() != CV_16U)
-    throw InputError(path, std::string("depth image is ") + DepthTypeName(image.type()) +
-                               ", expected 16-bit");
+    throw InputError(
+        path, std::string("depth image is ") + DepthTypeName(image.type()) + ", expected 16-bit");
   return image;
 }
 
@@ -100,7 +107,8 @@ cv::Mat ReadPgm16(const std::string& path, PgmByteOrder order) {
   }
   if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
     throw InputError(path, "implausible PGM size " + w + "x" + h);
-  if (max_value <= 255) throw InputError(path, "depth PGM is 8-bit (maxval " + maxval + "), expected 16-bit");
+  if (max_value <= 255)
+    throw InputError(path, "depth PGM is 8-bit (maxval " + maxval + "), expected 16-bit");
   if (max_value > 65535) throw InputError(path, "PGM maxval " + maxval + " out of range");
   const size_t count = static_cast<size_t>(width) * height;
   std::vector<uint8_t> bytes(count * 2);
@@ -114,8 +122,8 @@ cv::Mat ReadPgm16(const std::string& path, PgmByteOrder order) {
       if (((bytes[2 * i] << 8) | bytes[2 * i + 1]) > 2047) ++big_over;
       if (((bytes[2 * i + 1] << 8) | bytes[2 * i]) > 2047) ++little_over;
     }
-    order = (little_over == 0 && big_over > 0) ? PgmByteOrder::kLittleEndian
-                                                : PgmByteOrder::kBigEndian;
+    order =
+        (little_over == 0 && big_over > 0) ? PgmByteOrder::kLittleEndian : PgmByteOrder::kBigEndian;
   }
   cv::Mat image(height, width, CV_16UC1);
   uint16_t* out = image.ptr<uint16_t>();

@@ -1,9 +1,8 @@
 // Reading and writing the image files RGB-D datasets use, with one-line errors naming the file.
 #pragma once
 
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace gf {
 

@@ -5,9 +5,8 @@
 // camera says so (RgbdFrame::depth pixel (u,v) sees the same point as color pixel (u,v)).
 #pragma once
 
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace gf {
 

@@ -27,7 +27,8 @@ Eigen::Matrix3d InverseLeftJacobian(const Eigen::Vector3d& phi) {
   const double theta = phi.norm();
   const Eigen::Matrix3d W = Hat(phi);
   if (theta < 1e-5) return Eigen::Matrix3d::Identity() - 0.5 * W + W * W / 12.0;
-  const double c = (1.0 - theta * std::sin(theta) / (2.0 * (1.0 - std::cos(theta)))) / (theta * theta);
+  const double c =
+      (1.0 - theta * std::sin(theta) / (2.0 * (1.0 - std::cos(theta)))) / (theta * theta);
   return Eigen::Matrix3d::Identity() - 0.5 * W + c * W * W;
 }
 }  // namespace
@@ -47,7 +48,7 @@ Eigen::Matrix3d SO3Exp(const Eigen::Vector3d& phi) {
 Eigen::Vector3d SO3Log(const Eigen::Quaterniond& q_in) {
   const Eigen::Quaterniond q = Normalized(q_in);
   const double n = q.vec().norm();
-  if (n < kSmallAngle) return 2.0 * q.vec();  // first order: q ~ (1, phi/2)
+  if (n < kSmallAngle) return 2.0 * q.vec();        // first order: q ~ (1, phi/2)
   const double theta = 2.0 * std::atan2(n, q.w());  // in [0, pi] since w >= 0
   return theta / n * q.vec();
 }

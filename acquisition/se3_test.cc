@@ -1,9 +1,9 @@
 #include "acquisition/se3.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 namespace gf {
 namespace {

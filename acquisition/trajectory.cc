@@ -48,7 +48,8 @@ Trajectory ReadTumTrajectory(const std::string& path) {
       pose.timestamp = std::stod(pose.timestamp_text, &used);
       if (used != pose.timestamp_text.size()) throw std::invalid_argument("trailing characters");
     } catch (const std::exception&) {
-      throw InputError(path, LineError(line_number, "bad timestamp \"" + pose.timestamp_text + "\""));
+      throw InputError(path,
+                       LineError(line_number, "bad timestamp \"" + pose.timestamp_text + "\""));
     }
     if (!(fields >> tx >> ty >> tz >> qx >> qy >> qz >> qw))
       throw InputError(path, LineError(line_number, "expected 8 numbers: t tx ty tz qx qy qz qw"));
@@ -69,7 +70,8 @@ void WriteTumTrajectory(const std::string& path, const Trajectory& trajectory) {
     const Eigen::Vector3d& t = p.world_from_camera.translation();
     const Eigen::Quaterniond& q = p.world_from_camera.rotation();
     out << (p.timestamp_text.empty() ? FormatDouble(p.timestamp, 6) : p.timestamp_text);
-    for (double v : {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()}) out << ' ' << FormatDouble(v, 9);
+    for (double v : {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()})
+      out << ' ' << FormatDouble(v, 9);
     out << '\n';
   }
   WriteTextFileAtomically(path, out.str());

@@ -1,9 +1,9 @@
 #include "acquisition/trajectory.h"
 
+#include <gtest/gtest.h>
+
 #include <fstream>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "acquisition/errors.h"
 #include "tests/testing.h"

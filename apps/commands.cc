@@ -37,13 +37,14 @@ void RegisterCommands(CLI::App& app) {
   {
     auto args = std::make_shared<InputArgs>();
     CLI::App* cmd = app.add_subcommand(
-        "info", "print JSON about INPUT: source kind, frames, size, intrinsics, depth convention, "
-                "hole fraction");
+        "info",
+        "print JSON about INPUT: source kind, frames, size, intrinsics, depth convention, "
+        "hole fraction");
     AddInputArgs(cmd, args.get());
     cmd->callback([args] {
       TerminalProgress progress("info", std::nullopt);
-      const auto info = InputInfo(args->input, args->ToOptions(),
-                                  [&](int done, int) { progress.Update(done); });
+      const auto info =
+          InputInfo(args->input, args->ToOptions(), [&](int done, int) { progress.Update(done); });
       progress.Finish();
       std::cout << info.dump(2) << std::endl;
     });
@@ -53,7 +54,8 @@ void RegisterCommands(CLI::App& app) {
     auto data = std::make_shared<std::string>();
     CLI::App* cmd = app.add_subcommand("demo", "run the built-in demo and write OUT/report.html");
     cmd->add_option("--out", *out, "output folder")->capture_default_str();
-    cmd->add_option("--data", *data, "folder of datasets to summarise (default ../shared/datasets)");
+    cmd->add_option("--data", *data,
+                    "folder of datasets to summarise (default ../shared/datasets)");
     cmd->callback([out, data] { RunDemo(*out, *data); });
   }
 }

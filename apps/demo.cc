@@ -2,9 +2,8 @@
 
 #include <filesystem>
 #include <iostream>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
@@ -20,10 +19,17 @@ std::string HtmlEscape(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -77,9 +83,9 @@ void RunDemo(const std::string& out_dir, const std::string& data_dir_arg) {
       html << "<tr><td>" << HtmlEscape(fs::path(j["input"].get<std::string>()).filename().string())
            << "</td><td>" << j["source"].get<std::string>() << "</td><td>" << j["frames"]
            << "</td><td>" << j["width"] << "x" << j["height"] << "</td><td>"
-           << j["depth_convention"].get<std::string>() << "</td><td>"
-           << Percent(j["hole_fraction"]) << "</td><td>" << Percent(j["holes"]["no_return"])
-           << "</td><td>" << Percent(j["holes"]["out_of_range"]) << "</td></tr>";
+           << j["depth_convention"].get<std::string>() << "</td><td>" << Percent(j["hole_fraction"])
+           << "</td><td>" << Percent(j["holes"]["no_return"]) << "</td><td>"
+           << Percent(j["holes"]["out_of_range"]) << "</td></tr>";
     }
     html << "</table>";
   }

@@ -6,7 +6,8 @@ namespace gf {
 
 nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions options,
                                  const std::function<void(int, int)>& progress) {
-  options.load_color = false;  // holes are a property of depth; colour decoding would double the time
+  options.load_color =
+      false;  // holes are a property of depth; colour decoding would double the time
   std::unique_ptr<FrameSource> source = OpenFrameSource(input, options);
   const CameraFile& cf = source->camera_file();
   const Camera& c = cf.camera;

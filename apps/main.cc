@@ -1,11 +1,12 @@
 // The `glassfusion` command line: subcommand dispatch (DESIGN.md, "Command line contract").
 //
-// Exit codes: 0 success, 1 internal error, 2 bad input or usage (one line "error: <file>: <problem>").
-#include <cstdio>
-#include <iostream>
+// Exit codes: 0 success, 1 internal error, 2 bad input or usage (one line "error: <file>:
+// <problem>").
+#include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
-#include <spdlog/spdlog.h>
+#include <cstdio>
+#include <iostream>
 
 #include "acquisition/errors.h"
 #include "apps/commands.h"

@@ -1,8 +1,8 @@
 #include "apps/progress.h"
 
-#include <cstdio>
-
 #include <unistd.h>
+
+#include <cstdio>
 
 namespace gf {
 

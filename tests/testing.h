@@ -1,12 +1,11 @@
 // Helpers shared by GlassFusion tests (header-only, tests only).
 #pragma once
 
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <string>
-
-#include <gtest/gtest.h>
 
 namespace gf::testing {
 
@@ -22,8 +21,8 @@ class TempDir {
   TempDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     std::string name = std::string("gf-") + (info ? info->name() : "test") + "-";
-    path_ = std::filesystem::temp_directory_path() / (name + std::to_string(::getpid()) + "-" +
-                                                      std::to_string(counter_++));
+    path_ = std::filesystem::temp_directory_path() /
+            (name + std::to_string(::getpid()) + "-" + std::to_string(counter_++));
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }
@@ -42,6 +41,6 @@ class TempDir {
 }  // namespace gf::testing
 
 // Skips the test (never passes silently) when a dataset of ../shared/datasets is absent.
-#define GF_REQUIRE_DATASET(var, name)                                             \
-  const std::string var = ::gf::testing::SharedDataset(name);                      \
+#define GF_REQUIRE_DATASET(var, name)                         \
+  const std::string var = ::gf::testing::SharedDataset(name); \
   if (var.empty()) GTEST_SKIP() << "dataset " << name << " not found under " GF_SHARED_DATASETS
