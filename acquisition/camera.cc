@@ -97,6 +97,63 @@ Camera Camera::Scaled(double factor) const {
   return c;
 }
 
+namespace {
+
+double Number(const nlohmann::json& j, const std::string& where, const char* key,
+              const std::string& path) {
+  if (!j.contains(key)) throw InputError(path, "missing field \"" + where + key + "\"");
+  if (!j[key].is_number()) throw InputError(path, "field \"" + where + key + "\" must be a number");
+  return j[key].get<double>();
+}
+
+std::vector<double> Numbers(const nlohmann::json& j, const std::string& name, size_t max_size,
+                            const std::string& path) {
+  if (!j.is_array() || j.size() > max_size)
+    throw InputError(path, "\"" + name + "\" must be an array of at most " +
+                               std::to_string(max_size) + " numbers");
+  std::vector<double> values;
+  for (const auto& v : j) {
+    if (!v.is_number()) throw InputError(path, "\"" + name + "\" must hold numbers only");
+    values.push_back(v.get<double>());
+  }
+  return values;
+}
+
+// The intrinsics part of camera.json (top level, or the "depth_camera" object).
+Camera ParseIntrinsics(const nlohmann::json& j, const std::string& where, const std::string& path) {
+  Camera c;
+  const double width = Number(j, where, "width", path), height = Number(j, where, "height", path);
+  if (width != std::floor(width) || height != std::floor(height))
+    throw InputError(path, where + "width and height must be integers");
+  c.width = static_cast<int>(width);
+  c.height = static_cast<int>(height);
+  c.fx = Number(j, where, "fx", path);
+  c.fy = Number(j, where, "fy", path);
+  c.cx = Number(j, where, "cx", path);
+  c.cy = Number(j, where, "cy", path);
+  if (j.contains("distortion")) {
+    const std::vector<double> d = Numbers(j["distortion"], where + "distortion", 5, path);
+    std::copy(d.begin(), d.end(), c.distortion.begin());
+  }
+  std::string problem;
+  if (!c.Check(&problem)) throw InputError(path, where + problem);
+  return c;
+}
+
+nlohmann::ordered_json IntrinsicsJson(const Camera& c) {
+  nlohmann::ordered_json j;
+  j["width"] = c.width;
+  j["height"] = c.height;
+  j["fx"] = c.fx;
+  j["fy"] = c.fy;
+  j["cx"] = c.cx;
+  j["cy"] = c.cy;
+  j["distortion"] = std::vector<double>(c.distortion.begin(), c.distortion.end());
+  return j;
+}
+
+}  // namespace
+
 CameraFile LoadCameraFile(const std::string& path) {
   const std::string text = ReadTextFile(path);
   nlohmann::json j;
@@ -106,35 +163,10 @@ CameraFile LoadCameraFile(const std::string& path) {
     throw InputError(path, std::string("not valid JSON (") + e.what() + ")");
   }
   if (!j.is_object()) throw InputError(path, "expected a JSON object");
-  auto number = [&](const char* key) -> double {
-    if (!j.contains(key)) throw InputError(path, std::string("missing field \"") + key + "\"");
-    if (!j[key].is_number())
-      throw InputError(path, std::string("field \"") + key + "\" must be a number");
-    return j[key].get<double>();
-  };
   CameraFile file;
-  Camera& c = file.camera;
-  const double width = number("width"), height = number("height");
-  if (width != std::floor(width) || height != std::floor(height))
-    throw InputError(path, "width and height must be integers");
-  c.width = static_cast<int>(width);
-  c.height = static_cast<int>(height);
-  c.fx = number("fx");
-  c.fy = number("fy");
-  c.cx = number("cx");
-  c.cy = number("cy");
-  if (j.contains("distortion")) {
-    const auto& d = j["distortion"];
-    if (!d.is_array() || d.size() > 5)
-      throw InputError(path,
-                       "\"distortion\" must be an array of at most 5 numbers [k1,k2,p1,p2,k3]");
-    for (size_t i = 0; i < d.size(); ++i) {
-      if (!d[i].is_number()) throw InputError(path, "\"distortion\" must hold numbers only");
-      c.distortion[i] = d[i].get<double>();
-    }
-  }
+  file.camera = ParseIntrinsics(j, "", path);
   if (j.contains("depth_scale")) {
-    file.depth_scale = number("depth_scale");
+    file.depth_scale = Number(j, "", "depth_scale", path);
     if (!(file.depth_scale > 0) || !std::isfinite(file.depth_scale))
       throw InputError(path, "\"depth_scale\" must be a positive number of depth units per metre");
   }
@@ -143,23 +175,45 @@ CameraFile LoadCameraFile(const std::string& path) {
       throw InputError(path, "\"depth_registered_to_color\" must be true or false");
     file.depth_registered_to_color = j["depth_registered_to_color"].get<bool>();
   }
-  std::string problem;
-  if (!c.Check(&problem)) throw InputError(path, problem);
+  if (j.contains("depth_camera")) {
+    if (!j["depth_camera"].is_object())
+      throw InputError(path, "\"depth_camera\" must be an object of intrinsics");
+    file.depth_camera = ParseIntrinsics(j["depth_camera"], "depth_camera.", path);
+  }
+  if (j.contains("color_from_depth")) {
+    const auto& t = j["color_from_depth"];
+    if (!t.is_object() || !t.contains("rotation") || !t.contains("translation"))
+      throw InputError(path, "\"color_from_depth\" needs \"rotation\" (9) and \"translation\" (3)");
+    const std::vector<double> r = Numbers(t["rotation"], "color_from_depth.rotation", 9, path);
+    const std::vector<double> x =
+        Numbers(t["translation"], "color_from_depth.translation", 3, path);
+    if (r.size() != 9 || x.size() != 3)
+      throw InputError(path, "\"color_from_depth\" needs 9 rotation and 3 translation numbers");
+    Eigen::Matrix3d rotation;
+    for (int i = 0; i < 9; ++i) rotation(i / 3, i % 3) = r[i];
+    if ((rotation * rotation.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-3 ||
+        rotation.determinant() < 0)
+      throw InputError(path, "\"color_from_depth.rotation\" is not a rotation matrix");
+    file.color_from_depth = SE3(rotation, Eigen::Vector3d(x[0], x[1], x[2]));
+  }
+  if (!file.depth_registered_to_color && !file.depth_camera)
+    throw InputError(
+        path, "depth is not registered to colour but \"depth_camera\" intrinsics are missing");
   return file;
 }
 
 void SaveCameraFile(const std::string& path, const CameraFile& file) {
-  const Camera& c = file.camera;
-  nlohmann::ordered_json j;
-  j["width"] = c.width;
-  j["height"] = c.height;
-  j["fx"] = c.fx;
-  j["fy"] = c.fy;
-  j["cx"] = c.cx;
-  j["cy"] = c.cy;
-  j["distortion"] = std::vector<double>(c.distortion.begin(), c.distortion.end());
+  nlohmann::ordered_json j = IntrinsicsJson(file.camera);
   j["depth_scale"] = file.depth_scale;
   j["depth_registered_to_color"] = file.depth_registered_to_color;
+  if (file.depth_camera) {
+    j["depth_camera"] = IntrinsicsJson(*file.depth_camera);
+    const Eigen::Matrix3d r = file.color_from_depth.RotationMatrix();
+    std::vector<double> rotation;
+    for (int i = 0; i < 9; ++i) rotation.push_back(r(i / 3, i % 3));
+    const Eigen::Vector3d& t = file.color_from_depth.translation();
+    j["color_from_depth"] = {{"rotation", rotation}, {"translation", {t.x(), t.y(), t.z()}}};
+  }
   WriteTextFileAtomically(path, j.dump(2) + "\n");
 }
 

@@ -9,6 +9,13 @@
 //     "distortion": [k1, k2, p1, p2, k3], "depth_scale": 5000.0,
 //     "depth_registered_to_color": true }
 // depth_scale is raw depth units per metre (PNG value / depth_scale = metres).
+// Sources whose depth is not registered to colour (raw Kinect v1 disparity, some OpenNI devices)
+// add the depth (IR) camera and the rigid transform between the two:
+//     "depth_registered_to_color": false,
+//     "depth_camera": { "width": 640, "height": 480, "fx": ..., "fy": ..., "cx": ..., "cy": ...,
+//                       "distortion": [...] },
+//     "color_from_depth": { "rotation": [r00, r01, ..., r22], "translation": [tx, ty, tz] }
+// (rotation row-major; point_in_color = R * point_in_depth + t, metres).
 //
 // Usage:
 //   gf::CameraFile file = gf::LoadCameraFile("tum/camera.json");
@@ -21,7 +28,10 @@
 #include <Eigen/Core>
 #include <array>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
+
+#include "acquisition/se3.h"
 
 namespace gf {
 
@@ -69,6 +79,10 @@ struct CameraFile {
   Camera camera;
   double depth_scale = 5000.0;            // raw depth units per metre
   bool depth_registered_to_color = true;  // depth pixels already aligned with colour pixels
+  // Only for unregistered depth: intrinsics of the depth camera (camera above is the colour one)
+  // and the transform taking points from the depth camera's frame to the colour camera's.
+  std::optional<Camera> depth_camera;
+  SE3 color_from_depth;
 };
 
 // Reads camera.json; throws InputError naming the file on a missing file, bad JSON, a missing or

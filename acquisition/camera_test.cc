@@ -44,6 +44,11 @@ TEST(Camera, JsonRoundTripKeepsEveryField) {
   f.camera.height = 240;
   f.depth_scale = 1000.0;
   f.depth_registered_to_color = false;
+  Camera ir = TumFr1();
+  ir.fx = 580.5;
+  f.depth_camera = ir;
+  f.color_from_depth =
+      SE3::Exp((SE3::Tangent() << 0.025, 0.001, -0.002, 0.01, -0.02, 0.005).finished());
   SaveCameraFile(dir / "camera.json", f);
   const CameraFile g = LoadCameraFile(dir / "camera.json");
   EXPECT_EQ(g.camera.width, 320);
@@ -55,6 +60,16 @@ TEST(Camera, JsonRoundTripKeepsEveryField) {
   EXPECT_EQ(g.camera.distortion, f.camera.distortion);
   EXPECT_EQ(g.depth_scale, 1000.0);
   EXPECT_FALSE(g.depth_registered_to_color);
+  ASSERT_TRUE(g.depth_camera.has_value());
+  EXPECT_EQ(g.depth_camera->fx, 580.5);
+  EXPECT_LT((g.color_from_depth.Matrix() - f.color_from_depth.Matrix()).norm(), 1e-12);
+}
+
+TEST(Camera, UnregisteredDepthNeedsADepthCamera) {
+  testing::TempDir dir;
+  std::ofstream(dir / "camera.json") << R"({"width": 640, "height": 480, "fx": 5, "fy": 5, "cx": 1,
+      "cy": 1, "depth_registered_to_color": false})";
+  EXPECT_THROW(LoadCameraFile(dir / "camera.json"), InputError);
 }
 
 TEST(Camera, BadFilesGiveOneLineErrorsNamingFileAndProblem) {

@@ -134,6 +134,56 @@ cv::Mat DepthToRaw(const cv::Mat& depth_m, const DepthConvention& convention) {
   return raw;
 }
 
+bool ShadowOptions::Check(std::string* message) const {
+  if (!(min_relative_jump > 0) || !(width_tolerance_px >= 0) ||
+      !std::isfinite(projector_baseline_m)) {
+    if (message) *message = "need min_relative_jump > 0, width_tolerance_px >= 0, finite baseline";
+    return false;
+  }
+  return true;
+}
+
+size_t ClassifyShadows(const cv::Mat& depth_m, double fx, const ShadowOptions& options,
+                       cv::Mat* hole_mask) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+  GF_CHECK(depth_m.type() == CV_32FC1 && hole_mask && hole_mask->type() == CV_8UC1 &&
+               hole_mask->size() == depth_m.size(),
+           "need CV_32F depth and a CV_8U hole mask of the same size");
+  if (options.projector_baseline_m == 0) return 0;
+  const uint8_t no_return = static_cast<uint8_t>(HoleCode::kNoReturn);
+  const uint8_t shadow = static_cast<uint8_t>(HoleCode::kShadow);
+  const double baseline = std::abs(options.projector_baseline_m);
+  // Projector on +x: the far surface is on the left of the run, the near one on the right.
+  const bool far_on_left = options.projector_baseline_m > 0;
+  size_t marked = 0;
+  for (int y = 0; y < depth_m.rows; ++y) {
+    const float* d = depth_m.ptr<float>(y);
+    uint8_t* h = hole_mask->ptr<uint8_t>(y);
+    int x = 0;
+    while (x < depth_m.cols) {
+      if (h[x] != no_return) {
+        ++x;
+        continue;
+      }
+      const int start = x;
+      while (x < depth_m.cols && h[x] == no_return) ++x;
+      const int end = x;                                // run is [start, end)
+      if (start == 0 || end == depth_m.cols) continue;  // touches the border: no two sides
+      const float left = d[start - 1], right = d[end];
+      if (!(left > 0) || !(right > 0)) continue;  // bounded by another kind of hole
+      const double z_far = far_on_left ? left : right;
+      const double z_near = far_on_left ? right : left;
+      if (z_far < z_near * (1.0 + options.min_relative_jump)) continue;
+      const double predicted = fx * baseline * (1.0 / z_near - 1.0 / z_far);
+      if (end - start > predicted + options.width_tolerance_px) continue;
+      for (int i = start; i < end; ++i) h[i] = shadow;
+      marked += end - start;
+    }
+  }
+  return marked;
+}
+
 HoleStats& HoleStats::operator+=(const HoleStats& o) {
   pixels += o.pixels;
   no_return += o.no_return;

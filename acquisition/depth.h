@@ -91,6 +91,27 @@ void ConvertDepth(const cv::Mat& raw, const DepthConvention& convention,
 // Metric depth (CV_32F, 0 = none) back to raw units, e.g. for writing a TUM-format PNG.
 cv::Mat DepthToRaw(const cv::Mat& depth_m, const DepthConvention& convention);
 
+// Projector occlusion shadows. A structured-light sensor sees depth only where its projector's
+// pattern lands; next to a foreground edge, the background strip hidden from the projector is a
+// hole on the side away from the projector, as wide as the parallax of the two depths:
+//     width_px = fx * |baseline| * (1/z_near - 1/z_far).
+// Kinect v1: the projector sits 7.5 cm along the depth camera's +x axis, so shadows fall on the
+// left (-u) side of foreground objects.
+struct ShadowOptions {
+  double projector_baseline_m =
+      0.075;                        // projector position along the depth camera's x axis, metres
+  double min_relative_jump = 0.05;  // far side must be this much deeper than the near side
+  double width_tolerance_px = 2.0;  // a run may exceed the predicted width by this, pixels
+  bool Check(std::string* message = nullptr) const;
+};
+
+// Reclassifies kNoReturn runs along image rows as kShadow where a run lies between a far surface on
+// the side away from the projector and a near surface on the projector's side, and is no wider than
+// the shadow that depth step predicts. depth_m and hole_mask are in the depth camera's image;
+// fx is the depth camera's focal length in pixels. Returns the number of pixels reclassified.
+size_t ClassifyShadows(const cv::Mat& depth_m, double fx, const ShadowOptions& options,
+                       cv::Mat* hole_mask);
+
 struct HoleStats {
   size_t pixels = 0;
   size_t no_return = 0;

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "acquisition/depth_registration.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
@@ -89,7 +90,7 @@ std::string FirstExistingDir(const std::string& folder, std::initializer_list<co
 }  // namespace
 
 bool FrameSourceOptions::Check(std::string* message) const {
-  if (!depth.Check(message)) return false;
+  if (!depth.Check(message) || !shadows.Check(message)) return false;
   if (!(max_association_dt_s > 0)) {
     if (message) *message = "max_association_dt_s must be positive";
     return false;
@@ -152,22 +153,34 @@ bool FolderFrameSource::Next(RgbdFrame* frame) {
   f.color_path = e.color_path;
   f.depth_path = e.depth_path;
   const Camera& cam = camera_.camera;
+  const bool registered = camera_.depth_registered_to_color;
+  const Camera& depth_cam = registered ? cam : *camera_.depth_camera;
   const cv::Mat raw = ReadDepthImage(e.depth_path);
-  if (raw.cols != cam.width || raw.rows != cam.height) {
+  if (raw.cols != depth_cam.width || raw.rows != depth_cam.height) {
     std::ostringstream s;
-    s << "depth image is " << raw.cols << "x" << raw.rows << " but the camera is " << cam.width
-      << "x" << cam.height;
+    s << "depth image is " << raw.cols << "x" << raw.rows << " but the "
+      << (registered ? "camera" : "depth camera") << " is " << depth_cam.width << "x"
+      << depth_cam.height;
     throw InputError(e.depth_path, s.str());
   }
   const std::string problem = convention_.ValidateRaw(raw);
   if (!problem.empty()) throw InputError(e.depth_path, problem);
   ConvertDepth(raw, convention_, options_.depth, &f.depth, &f.hole_mask);
+  ClassifyShadows(f.depth, depth_cam.fx, options_.shadows, &f.hole_mask);
+  f.sensor_holes = CountHoles(f.hole_mask);
+  if (!registered) {
+    cv::Mat depth, holes;
+    RegisterDepthToColor(f.depth, f.hole_mask, depth_cam, cam, camera_.color_from_depth, &depth,
+                         &holes);
+    f.depth = depth;
+    f.hole_mask = holes;
+  }
   if (options_.load_color) {
     f.color = ReadColorImage(e.color_path);
-    if (f.color.size() != raw.size()) {
+    if (f.color.cols != cam.width || f.color.rows != cam.height) {
       std::ostringstream s;
-      s << "colour image is " << f.color.cols << "x" << f.color.rows << " but its depth image "
-        << e.depth_path << " is " << raw.cols << "x" << raw.rows;
+      s << "colour image is " << f.color.cols << "x" << f.color.rows << " but the camera is "
+        << cam.width << "x" << cam.height << " (depth image " << e.depth_path << ")";
       throw InputError(e.color_path, s.str());
     }
   }
@@ -250,6 +263,147 @@ std::unique_ptr<FolderFrameSource> OpenRedwoodFolder(const std::string& folder,
   return source;
 }
 
+CameraFile NominalKinectV1Calibration() {
+  CameraFile f;
+  f.camera.fx = 529.2;  // colour camera
+  f.camera.fy = 525.6;
+  f.camera.cx = 328.9;
+  f.camera.cy = 267.5;
+  Camera ir;
+  ir.fx = 594.2;
+  ir.fy = 591.0;
+  ir.cx = 339.3;
+  ir.cy = 242.7;
+  f.depth_camera = ir;
+  f.depth_registered_to_color = false;
+  f.depth_scale = 1000.0;  // not used for disparity
+  Eigen::Matrix3d r;
+  r << 0.99985, 0.00126, -0.01749, -0.00148, 0.99992, -0.01225, 0.01747, 0.01228, 0.99977;
+  f.color_from_depth = SE3::FromMatrix(
+      (Eigen::Matrix4d() << r, Eigen::Vector3d(0.01999, -0.00074, -0.01092), 0, 0, 0, 1)
+          .finished());
+  return f;
+}
+
+namespace {
+
+bool StartsWith(const std::string& s, const std::string& prefix) {
+  return s.compare(0, prefix.size(), prefix) == 0;
+}
+
+bool Contains(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
+
+// Parses "d-1294352291.235890-2213567.pgm" into its time text and seconds.
+bool ParseFakenectName(const std::string& name, std::string* time_text, double* seconds) {
+  if (name.size() < 3 || name[1] != '-') return false;
+  const size_t dash = name.find('-', 2);
+  if (dash == std::string::npos) return false;
+  *time_text = name.substr(2, dash - 2);
+  try {
+    size_t used = 0;
+    *seconds = std::stod(*time_text, &used);
+    return used == time_text->size();
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+CameraFile KinectCamera(const std::string& folder, const FrameSourceOptions& options) {
+  const std::string path = options.camera_file.empty() ? (fs::path(folder) / "camera.json").string()
+                                                       : options.camera_file;
+  if (IsRegularFile(path)) return LoadCameraFile(path);
+  if (!options.camera_file.empty()) throw InputError(path, "file not found");
+  spdlog::warn("{}: no camera.json; using a nominal Kinect v1 calibration (pass --camera FILE)",
+               folder);
+  return NominalKinectV1Calibration();
+}
+
+}  // namespace
+
+std::unique_ptr<FolderFrameSource> OpenKinectRawFolder(const std::string& folder,
+                                                       const FrameSourceOptions& options) {
+  const CameraFile camera = KinectCamera(folder, options);
+  std::vector<FolderFrameEntry> entries;
+  int listed_depth = 0, listed_color = 0;
+  const std::string index_path = (fs::path(folder) / "INDEX.txt").string();
+  std::string kind = "kinect_raw";
+  if (IsRegularFile(index_path)) {
+    kind = "fakenect";
+    std::istringstream in(ReadTextFile(index_path));
+    std::vector<IndexLine> depth, color;
+    std::string line;
+    int number = 0;
+    while (std::getline(in, line)) {
+      ++number;
+      while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back())))
+        line.pop_back();
+      if (line.empty()) continue;
+      IndexLine entry;
+      if (!ParseFakenectName(line, &entry.timestamp_text, &entry.timestamp))
+        throw InputError(index_path, "line " + std::to_string(number) + ": \"" + line +
+                                         "\" is not a fakenect file name (d-/r-/a-<time>-<n>.*)");
+      entry.path = (fs::path(folder) / line).string();
+      if (line[0] == 'd') depth.push_back(entry);
+      if (line[0] == 'r') color.push_back(entry);
+    }
+    if (depth.empty()) throw InputError(index_path, "lists no depth frames (d-*.pgm)");
+    auto by_time = [](const IndexLine& a, const IndexLine& b) { return a.timestamp < b.timestamp; };
+    std::stable_sort(depth.begin(), depth.end(), by_time);
+    std::stable_sort(color.begin(), color.end(), by_time);
+    std::vector<double> td, tc;
+    for (const auto& d : depth) td.push_back(d.timestamp);
+    for (const auto& c : color) tc.push_back(c.timestamp);
+    for (const auto& [i, j] : AssociateTimestamps(td, tc, options.max_association_dt_s)) {
+      FolderFrameEntry e;
+      e.timestamp = depth[i].timestamp;
+      e.timestamp_text = depth[i].timestamp_text;
+      e.color_timestamp = color[j].timestamp;
+      e.depth_path = depth[i].path;
+      e.color_path = color[j].path;
+      entries.push_back(e);
+    }
+    listed_depth = static_cast<int>(depth.size());
+    listed_color = static_cast<int>(color.size());
+    if (entries.empty())
+      throw InputError(index_path,
+                       "no depth frame has a colour frame within the association window");
+  } else {
+    std::vector<std::string> depths, colors;
+    for (const std::string& path : ImagesIn(folder)) {
+      std::string name = fs::path(path).filename().string();
+      std::transform(name.begin(), name.end(), name.begin(), ::tolower);
+      if (StartsWith(name, "d-") || Contains(name, "depth")) {
+        depths.push_back(path);
+      } else if (StartsWith(name, "r-") || Contains(name, "color") || Contains(name, "rgb")) {
+        colors.push_back(path);
+      }
+    }
+    if (depths.empty()) throw InputError(folder, "no raw depth images (d-*.pgm or *depth*.pgm)");
+    if (colors.size() != depths.size())
+      throw InputError(folder, std::to_string(depths.size()) + " depth images but " +
+                                   std::to_string(colors.size()) + " colour images");
+    for (size_t i = 0; i < depths.size(); ++i) {
+      FolderFrameEntry e;
+      e.timestamp = e.color_timestamp = static_cast<double>(i);
+      e.timestamp_text = std::to_string(i);
+      e.depth_path = depths[i];
+      e.color_path = colors[i];
+      entries.push_back(e);
+    }
+    listed_depth = listed_color = static_cast<int>(depths.size());
+  }
+  const int pairs = static_cast<int>(entries.size());
+  auto source = std::make_unique<FolderFrameSource>(
+      kind, folder, camera, DepthConvention::KinectV1Raw11Bit(), std::move(entries), options);
+  source->listed_depth = listed_depth;
+  source->listed_color = listed_color;
+  source->unmatched_depth = listed_depth - pairs;
+  source->unmatched_color = listed_color - pairs;
+  return source;
+}
+
 InMemoryFrameSource::InMemoryFrameSource(CameraFile camera, std::vector<RgbdFrame> frames)
     : camera_(camera), frames_(std::move(frames)) {}
 
@@ -264,10 +418,15 @@ std::string DetectInputKind(const std::string& input) {
     const fs::path p(input);
     if (IsRegularFile((p / "rgb.txt").string()) && IsRegularFile((p / "depth.txt").string()))
       return "tum";
+    if (IsRegularFile((p / "INDEX.txt").string())) return "fakenect";
     const bool has_color = !FirstExistingDir(input, {"image", "color", "rgb"}).empty();
     const bool has_depth = !FirstExistingDir(input, {"depth", "depth_noisy"}).empty();
     if (has_color && has_depth) return "redwood";
+    for (const std::string& f : ImagesIn(input))
+      if (fs::path(f).extension() == ".pgm") return "kinect_raw";
+    return {};
   }
+  if (IsRegularFile(input) && fs::path(input).extension() == ".oni") return "oni";
   return {};
 }
 
@@ -279,6 +438,7 @@ std::unique_ptr<FrameSource> OpenFrameSource(const std::string& input,
   const std::string kind = DetectInputKind(input);
   if (kind == "tum") return OpenTumFolder(input, options);
   if (kind == "redwood") return OpenRedwoodFolder(input, options);
+  if (kind == "fakenect" || kind == "kinect_raw") return OpenKinectRawFolder(input, options);
   throw InputError(input,
                    "unrecognised input: expected a TUM folder (rgb.txt, depth.txt) or a Redwood "
                    "folder (image/ or color/, depth/)");

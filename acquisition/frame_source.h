@@ -29,6 +29,7 @@ struct FrameSourceOptions {
   double max_association_dt_s = 0.02;  // TUM colour/depth association window, seconds
   std::string camera_file;             // overrides <folder>/camera.json when not empty
   std::string depth_folder;            // Redwood: depth subfolder; empty = depth/ or depth_noisy/
+  ShadowOptions shadows;               // projector-shadow classification of no-return holes
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -96,6 +97,21 @@ std::unique_ptr<FolderFrameSource> OpenTumFolder(const std::string& folder,
 std::unique_ptr<FolderFrameSource> OpenRedwoodFolder(const std::string& folder,
                                                      const FrameSourceOptions& options);
 
+// Raw Kinect v1 folder: 11-bit disparity images (*.pgm / *.png whose name starts with "d-" or
+// contains "depth") paired by sorted name with colour images (name starts with "r-" or contains
+// "color"/"rgb"). With an INDEX.txt it is a libfreenect fakenect recording: the index lists
+// d-<time>-<counter>.pgm and r-<time>-<counter>.ppm files (a-*.dump accelerometer lines are
+// ignored) and colour is associated to depth by time. Depth is in the IR camera: frames are
+// registered to colour with camera.json's depth_camera and color_from_depth, or with
+// NominalKinectV1Calibration() when the folder has no camera.json (logged as a warning).
+std::unique_ptr<FolderFrameSource> OpenKinectRawFolder(const std::string& folder,
+                                                       const FrameSourceOptions& options);
+
+// A typical Kinect v1 calibration (N. Burrus' published sample calibration, rounded): colour and
+// IR cameras at 640x480 and the IR-to-colour transform (about 2.3 cm apart). Use a calibration of
+// the actual device where one exists: units differ by a few pixels.
+CameraFile NominalKinectV1Calibration();
+
 // Frames held in memory: for tests and for piping one stage's output into another.
 class InMemoryFrameSource : public FrameSource {
  public:
@@ -115,7 +131,8 @@ class InMemoryFrameSource : public FrameSource {
   size_t next_ = 0;
 };
 
-// What kind of input a path is: "tum", "redwood", or "" when unrecognised.
+// What kind of input a path is: "tum", "redwood", "fakenect", "kinect_raw", "oni", or "" when
+// unrecognised.
 std::string DetectInputKind(const std::string& input);
 
 // Opens any supported input, detected from what it is. Throws InputError naming the input when it

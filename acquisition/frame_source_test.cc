@@ -90,6 +90,77 @@ TEST(RedwoodFolder, ReadsIclMicroAndNoisyDepth) {
   EXPECT_LT(clean.Fraction(), stats.Fraction());
 }
 
+TEST(KinectRawFolder, NyuFrameReadsAsRawDisparityRegisteredToColour) {
+  GF_REQUIRE_DATASET(raw, "kinect_v1_raw");
+  auto source = OpenFrameSource(raw, {});
+  EXPECT_EQ(source->Kind(), "kinect_raw");
+  EXPECT_EQ(source->depth_convention(), DepthConvention::KinectV1Raw11Bit());
+  RgbdFrame frame;
+  ASSERT_TRUE(source->Next(&frame));
+  EXPECT_EQ(frame.color.size(), cv::Size(640, 480));
+  // 7.2% of the sensor's pixels are 2047 (no return, some of it classed as projector shadow).
+  EXPECT_NEAR(frame.sensor_holes.Fraction(), 0.0723, 0.0005);
+  EXPECT_GT(frame.sensor_holes.shadow, 0u);
+  // Registered depth covers most of the colour image at indoor depths.
+  const double covered = cv::countNonZero(frame.depth > 0) / 307200.0;
+  EXPECT_GT(covered, 0.6);
+  EXPECT_FALSE(source->Next(&frame));
+}
+
+TEST(KinectRawFolder, FakenectRecordingPairsByTime) {
+  testing::TempDir dir;
+  // Two depth and two colour frames, plus an accelerometer dump the reader must ignore.
+  std::ofstream(dir / "INDEX.txt") << "a-1294352291.200000-0.dump\n"
+                                      "d-1294352291.235890-2213567.pgm\n"
+                                      "r-1294352291.240000-2213600.ppm\n"
+                                      "d-1294352291.269000-2215567.pgm\n"
+                                      "r-1294352291.275000-2215600.ppm\n";
+  const DepthConvention k = DepthConvention::KinectV1Raw11Bit();
+  for (const char* name : {"d-1294352291.235890-2213567.pgm", "d-1294352291.269000-2215567.pgm"}) {
+    // fakenect writes the raw little-endian buffer behind a P5 header.
+    std::ofstream out(dir / name, std::ios::binary);
+    out << "P5 640 480 65535\n";
+    for (int i = 0; i < 640 * 480; ++i) {
+      const uint16_t v = (i % 640) < 20 ? 2047 : k.FromMetres(2.0);
+      out.put(static_cast<char>(v & 0xFF)).put(static_cast<char>(v >> 8));
+    }
+  }
+  for (const char* name : {"r-1294352291.240000-2213600.ppm", "r-1294352291.275000-2215600.ppm"})
+    cv::imwrite(dir / name, cv::Mat(480, 640, CV_8UC3, cv::Scalar(40, 80, 120)));
+  auto source = OpenFrameSource(dir.path(), {});
+  EXPECT_EQ(source->Kind(), "fakenect");
+  EXPECT_EQ(source->FrameCount().value(), 2);
+  RgbdFrame frame;
+  ASSERT_TRUE(source->Next(&frame));
+  EXPECT_EQ(frame.timestamp_text, "1294352291.235890");
+  EXPECT_NEAR(frame.color_timestamp, 1294352291.24, 1e-6);
+  EXPECT_NEAR(frame.sensor_holes.Fraction(), 20.0 / 640, 1e-9);
+  // A plane 2 m in front of the IR camera; the nominal extrinsics turn it by 1 degree and move it
+  // 1 cm, so in the colour camera it spans about 1.96-2.03 m.
+  double lo, hi;
+  cv::minMaxLoc(frame.depth, &lo, &hi, nullptr, nullptr, frame.depth > 0);
+  EXPECT_GT(lo, 1.95);
+  EXPECT_LT(hi, 2.05);
+  EXPECT_NEAR(frame.depth.at<float>(240, 330), 1.99, 0.01);
+  ASSERT_TRUE(source->Next(&frame));
+  EXPECT_FALSE(source->Next(&frame));
+
+  // A listed file that is missing is named in the error.
+  std::ofstream(dir / "INDEX.txt", std::ios::app) << "d-1294352291.302000-2217567.pgm\n"
+                                                     "r-1294352291.305000-2217600.ppm\n";
+  auto broken = OpenFrameSource(dir.path(), {});
+  ASSERT_TRUE(broken->Next(&frame));
+  ASSERT_TRUE(broken->Next(&frame));
+  try {
+    broken->Next(&frame);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("d-1294352291.302000-2217567.pgm: file not found"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // A small TUM folder written here, for the failure cases.
 class TinyTum : public ::testing::Test {
  protected:

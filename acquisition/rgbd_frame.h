@@ -8,6 +8,8 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "acquisition/depth.h"
+
 namespace gf {
 
 struct RgbdFrame {
@@ -18,8 +20,11 @@ struct RgbdFrame {
   cv::Mat color;               // CV_8UC3, BGR; may be empty when the source was told to skip colour
   cv::Mat depth;               // CV_32FC1, metres along the optical axis, 0 = no depth
   cv::Mat hole_mask;           // CV_8UC1, gf::HoleCode per pixel
-  std::string color_path;      // where the colour came from, for error messages (may be empty)
-  std::string depth_path;      // where the depth came from (may be empty)
+  // Holes counted in the sensor's own depth image, before registration to colour (which adds
+  // pixels outside the depth camera's view); equal to CountHoles(hole_mask) for registered input.
+  HoleStats sensor_holes;
+  std::string color_path;  // where the colour came from, for error messages (may be empty)
+  std::string depth_path;  // where the depth came from (may be empty)
 };
 
 }  // namespace gf

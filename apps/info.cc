@@ -18,7 +18,7 @@ nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions op
   int frames = 0;
   double first_time = 0, last_time = 0;
   while (source->Next(&frame)) {
-    holes += CountHoles(frame.hole_mask);
+    holes += frame.sensor_holes;
     if (frames == 0) first_time = frame.timestamp;
     last_time = frame.timestamp;
     ++frames;

@@ -1,0 +1,116 @@
+#include "acquisition/depth_registration.h"
+
+#include <gtest/gtest.h>
+
+#include "acquisition/depth.h"
+
+namespace gf {
+namespace {
+
+// A tilted plane n . p = d seen by an IR camera 2.5 cm to the side of a colour camera with other
+// intrinsics: registration must reproduce the plane's depth as the colour camera sees it.
+TEST(RegisterDepthToColor, TiltedPlaneLandsWhereTheColourCameraSeesIt) {
+  Camera ir;
+  ir.fx = ir.fy = 580.0;
+  ir.cx = 314.5;
+  ir.cy = 235.5;
+  Camera color;
+  color.fx = color.fy = 525.0;
+  color.cx = 319.5;
+  color.cy = 239.5;
+  const SE3 color_from_depth(Eigen::Quaterniond(Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitY())),
+                             Eigen::Vector3d(-0.025, 0.001, 0.002));
+  // Plane in the colour camera's frame: z = 2.0 + 0.3 x + 0.1 y.
+  const Eigen::Vector3d n_color = Eigen::Vector3d(-0.3, -0.1, 1.0);
+  const double d_color = 2.0;
+  auto plane_depth = [&](const Camera& cam, const SE3& world_from_cam, double u, double v) {
+    // Ray p = t * r in cam; plane in colour frame: n . (R p + t0) = d.
+    const Eigen::Vector3d r((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
+    const Eigen::Vector3d rw = world_from_cam.RotationMatrix() * r;
+    const double t = (d_color - n_color.dot(world_from_cam.translation())) / n_color.dot(rw);
+    return t;  // z in cam, since r.z = 1
+  };
+  cv::Mat depth(480, 640, CV_32FC1);
+  for (int v = 0; v < 480; ++v)
+    for (int u = 0; u < 640; ++u)
+      depth.at<float>(v, u) = static_cast<float>(plane_depth(ir, color_from_depth, u, v));
+  cv::Mat holes(480, 640, CV_8UC1, cv::Scalar(0));
+  cv::Mat reg_depth, reg_holes;
+  RegisterDepthToColor(depth, holes, ir, color, color_from_depth, &reg_depth, &reg_holes);
+
+  // Check the colour pixels whose plane point the IR camera sees (its view is narrower: fx 580).
+  const SE3 depth_from_color = color_from_depth.Inverse();
+  int covered = 0, checked = 0;
+  double max_error = 0;
+  for (int v = 0; v < 480; ++v) {
+    for (int u = 0; u < 640; ++u) {
+      const double z_color = plane_depth(color, SE3(), u, v);
+      const Eigen::Vector2d in_ir =
+          ir.Project(depth_from_color * color.BackProject({u, v}, z_color));
+      if (in_ir.x() < 1 || in_ir.y() < 1 || in_ir.x() > 638 || in_ir.y() > 478) continue;
+      ++checked;
+      const float z = reg_depth.at<float>(v, u);
+      if (z <= 0) continue;
+      ++covered;
+      max_error = std::max(max_error, std::abs(z - z_color));
+    }
+  }
+  // No cracks inside the IR camera's view, and the nearest-surface splat is within the depth change
+  // across its footprint (slope 0.3 at 2.6 m: about 1.4 mm per IR pixel, so under 3 mm).
+  EXPECT_GT(checked, 200000);
+  EXPECT_GT(covered, 0.995 * checked);
+  EXPECT_LT(max_error, 0.003);
+  EXPECT_EQ(reg_holes.at<uint8_t>(240, 320), static_cast<uint8_t>(HoleCode::kValid));
+}
+
+TEST(RegisterDepthToColor, HolesKeepTheirClassAndNearSurfacesWin) {
+  Camera cam;  // same camera, pure translation: a fronto-parallel scene shifts by f*b/z pixels
+  const SE3 color_from_depth(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.05, 0, 0));
+  cv::Mat depth(480, 640, CV_32FC1, cv::Scalar(2.0f));
+  cv::Mat holes(480, 640, CV_8UC1, cv::Scalar(0));
+  depth(cv::Rect(300, 200, 40, 40)).setTo(1.0f);  // a near box
+  depth(cv::Rect(100, 100, 20, 20)).setTo(0.0f);  // a glass patch: no return
+  holes(cv::Rect(100, 100, 20, 20)).setTo(static_cast<uint8_t>(HoleCode::kNoReturn));
+  cv::Mat reg_depth, reg_holes;
+  RegisterDepthToColor(depth, holes, cam, cam, color_from_depth, &reg_depth, &reg_holes);
+  // Box moves by 525 * 0.05 / 1.0 = 26.25 px, background by 13.1 px.
+  EXPECT_FLOAT_EQ(reg_depth.at<float>(220, 300 + 26 + 20), 1.0f);
+  EXPECT_FLOAT_EQ(reg_depth.at<float>(220, 300 + 26 + 50), 2.0f);
+  // The glass hole moved with the background and is still a no-return hole.
+  EXPECT_EQ(reg_holes.at<uint8_t>(110, 110 + 13), static_cast<uint8_t>(HoleCode::kNoReturn));
+  EXPECT_EQ(reg_depth.at<float>(110, 110 + 13), 0.0f);
+  // Columns the depth camera never saw (left edge after the shift) are out of view.
+  EXPECT_EQ(reg_holes.at<uint8_t>(240, 2), static_cast<uint8_t>(HoleCode::kOutOfRange));
+}
+
+TEST(ClassifyShadows, MarksTheStripLeftOfANearObjectOnly) {
+  // Background at 3 m, a box at 1.5 m over columns [300, 400). With the projector 7.5 cm to the
+  // right, the shadow is 525 * 0.075 * (1/1.5 - 1/3) = 13.1 px wide, left of the box.
+  const double fx = 525.0;
+  cv::Mat depth(10, 640, CV_32FC1, cv::Scalar(3.0f));
+  cv::Mat holes(10, 640, CV_8UC1, cv::Scalar(0));
+  depth.colRange(300, 400).setTo(1.5f);
+  auto hole = [&](int from, int to) {
+    depth.colRange(from, to).setTo(0.f);
+    holes.colRange(from, to).setTo(static_cast<uint8_t>(HoleCode::kNoReturn));
+  };
+  hole(287, 300);  // the projector shadow
+  hole(400, 410);  // a hole right of the box: the wrong side for a shadow
+  hole(100, 130);  // a glass pane on the background: no depth step
+  const size_t marked = ClassifyShadows(depth, fx, ShadowOptions{}, &holes);
+  EXPECT_EQ(marked, 13u * 10);
+  EXPECT_EQ(holes.at<uint8_t>(5, 290), static_cast<uint8_t>(HoleCode::kShadow));
+  EXPECT_EQ(holes.at<uint8_t>(5, 405), static_cast<uint8_t>(HoleCode::kNoReturn));
+  EXPECT_EQ(holes.at<uint8_t>(5, 110), static_cast<uint8_t>(HoleCode::kNoReturn));
+
+  // A hole far wider than the parallax allows is not a shadow (glass next to the box).
+  cv::Mat holes2(10, 640, CV_8UC1, cv::Scalar(0));
+  cv::Mat depth2 = cv::Mat(10, 640, CV_32FC1, cv::Scalar(3.0f));
+  depth2.colRange(300, 400).setTo(1.5f);
+  depth2.colRange(250, 300).setTo(0.f);
+  holes2.colRange(250, 300).setTo(static_cast<uint8_t>(HoleCode::kNoReturn));
+  EXPECT_EQ(ClassifyShadows(depth2, fx, ShadowOptions{}, &holes2), 0u);
+}
+
+}  // namespace
+}  // namespace gf
