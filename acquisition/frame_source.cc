@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "acquisition/depth_registration.h"
+#include "acquisition/devices.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
@@ -128,6 +129,32 @@ std::vector<std::pair<size_t, size_t>> AssociateTimestamps(const std::vector<dou
   return pairs;
 }
 
+void ProcessRawDepth(const cv::Mat& raw, const std::string& where, const CameraFile& camera,
+                     const DepthConvention& convention, const FrameSourceOptions& options,
+                     RgbdFrame* f) {
+  const bool registered = camera.depth_registered_to_color;
+  const Camera& depth_cam = registered ? camera.camera : *camera.depth_camera;
+  if (raw.cols != depth_cam.width || raw.rows != depth_cam.height) {
+    std::ostringstream s;
+    s << "depth image is " << raw.cols << "x" << raw.rows << " but the "
+      << (registered ? "camera" : "depth camera") << " is " << depth_cam.width << "x"
+      << depth_cam.height;
+    throw InputError(where, s.str());
+  }
+  const std::string problem = convention.ValidateRaw(raw);
+  if (!problem.empty()) throw InputError(where, problem);
+  ConvertDepth(raw, convention, options.depth, &f->depth, &f->hole_mask);
+  ClassifyShadows(f->depth, depth_cam.fx, options.shadows, &f->hole_mask);
+  f->sensor_holes = CountHoles(f->hole_mask);
+  if (!registered) {
+    cv::Mat depth, holes;
+    RegisterDepthToColor(f->depth, f->hole_mask, depth_cam, camera.camera, camera.color_from_depth,
+                         &depth, &holes);
+    f->depth = depth;
+    f->hole_mask = holes;
+  }
+}
+
 FolderFrameSource::FolderFrameSource(std::string kind, std::string input, CameraFile camera,
                                      DepthConvention convention,
                                      std::vector<FolderFrameEntry> entries,
@@ -153,28 +180,7 @@ bool FolderFrameSource::Next(RgbdFrame* frame) {
   f.color_path = e.color_path;
   f.depth_path = e.depth_path;
   const Camera& cam = camera_.camera;
-  const bool registered = camera_.depth_registered_to_color;
-  const Camera& depth_cam = registered ? cam : *camera_.depth_camera;
-  const cv::Mat raw = ReadDepthImage(e.depth_path);
-  if (raw.cols != depth_cam.width || raw.rows != depth_cam.height) {
-    std::ostringstream s;
-    s << "depth image is " << raw.cols << "x" << raw.rows << " but the "
-      << (registered ? "camera" : "depth camera") << " is " << depth_cam.width << "x"
-      << depth_cam.height;
-    throw InputError(e.depth_path, s.str());
-  }
-  const std::string problem = convention_.ValidateRaw(raw);
-  if (!problem.empty()) throw InputError(e.depth_path, problem);
-  ConvertDepth(raw, convention_, options_.depth, &f.depth, &f.hole_mask);
-  ClassifyShadows(f.depth, depth_cam.fx, options_.shadows, &f.hole_mask);
-  f.sensor_holes = CountHoles(f.hole_mask);
-  if (!registered) {
-    cv::Mat depth, holes;
-    RegisterDepthToColor(f.depth, f.hole_mask, depth_cam, cam, camera_.color_from_depth, &depth,
-                         &holes);
-    f.depth = depth;
-    f.hole_mask = holes;
-  }
+  ProcessRawDepth(ReadDepthImage(e.depth_path), e.depth_path, camera_, convention_, options_, &f);
   if (options_.load_color) {
     f.color = ReadColorImage(e.color_path);
     if (f.color.cols != cam.width || f.color.rows != cam.height) {
@@ -434,14 +440,31 @@ std::unique_ptr<FrameSource> OpenFrameSource(const std::string& input,
                                              const FrameSourceOptions& options) {
   std::string problem;
   if (!options.Check(&problem)) throw InputError(input, "bad frame source options: " + problem);
+  // Live devices: "dummy", "openni2[:URI]", "freenect[:INDEX]".
+  if (input == "dummy") return OpenOpenNI2Source("Dummy", options);
+  if (input == "openni2") return OpenOpenNI2Source("", options);
+  if (input.rfind("openni2:", 0) == 0) return OpenOpenNI2Source(input.substr(8), options);
+  if (input == "freenect" || input.rfind("freenect:", 0) == 0) {
+    int index = 0;
+    if (input.size() > 9) {
+      try {
+        index = std::stoi(input.substr(9));
+      } catch (const std::exception&) {
+        throw InputError(input, "expected freenect:INDEX with a device number");
+      }
+    }
+    return OpenFreenectSource(index, options);
+  }
   if (!fs::exists(input)) throw InputError(input, "no such file or folder");
   const std::string kind = DetectInputKind(input);
+  if (kind == "oni") return OpenOpenNI2Source(input, options);
   if (kind == "tum") return OpenTumFolder(input, options);
   if (kind == "redwood") return OpenRedwoodFolder(input, options);
   if (kind == "fakenect" || kind == "kinect_raw") return OpenKinectRawFolder(input, options);
   throw InputError(input,
-                   "unrecognised input: expected a TUM folder (rgb.txt, depth.txt) or a Redwood "
-                   "folder (image/ or color/, depth/)");
+                   "unrecognised input: expected a TUM folder (rgb.txt, depth.txt), a Redwood "
+                   "folder (image/ or color/, depth/), a raw Kinect folder (*.pgm, INDEX.txt), an "
+                   ".oni file or a device (dummy, openni2[:URI], freenect[:INDEX])");
 }
 
 }  // namespace gf

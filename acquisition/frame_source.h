@@ -49,6 +49,15 @@ class FrameSource {
   virtual bool Next(RgbdFrame* frame) = 0;
 };
 
+// The conversion every source applies to a raw depth image (named `where` in errors): checks it
+// against the convention and the (depth) camera size, converts to metres, classifies holes (no
+// return, out of range, projector shadow), counts them in the sensor's image, and registers depth
+// to colour when the camera file says it is not registered. Fills frame->depth, hole_mask and
+// sensor_holes. Throws InputError naming `where`.
+void ProcessRawDepth(const cv::Mat& raw, const std::string& where, const CameraFile& camera,
+                     const DepthConvention& convention, const FrameSourceOptions& options,
+                     RgbdFrame* frame);
+
 // One frame of a folder dataset before its images are read.
 struct FolderFrameEntry {
   double timestamp = 0;
@@ -135,8 +144,9 @@ class InMemoryFrameSource : public FrameSource {
 // unrecognised.
 std::string DetectInputKind(const std::string& input);
 
-// Opens any supported input, detected from what it is. Throws InputError naming the input when it
-// is missing or of no known kind.
+// Opens any supported input, detected from what it is: a TUM, Redwood or raw Kinect folder, an .oni
+// recording, or a live device ("dummy" = OpenNI2's software device, "openni2[:URI]",
+// "freenect[:INDEX]"). Throws InputError naming the input when it is missing or of no known kind.
 std::unique_ptr<FrameSource> OpenFrameSource(const std::string& input,
                                              const FrameSourceOptions& options);
 

@@ -2,6 +2,7 @@
 
 #include <iostream>
 
+#include "apps/capture.h"
 #include "apps/demo.h"
 #include "apps/info.h"
 #include "apps/progress.h"
@@ -24,7 +25,8 @@ struct InputArgs {
 
 void AddInputArgs(CLI::App* cmd, InputArgs* args) {
   cmd->add_option("INPUT", args->input,
-                  "TUM folder (rgb.txt, depth.txt) or Redwood folder (image/ or color/, depth/)")
+                  "TUM folder, Redwood folder, raw Kinect folder (*.pgm / fakenect INDEX.txt), "
+                  ".oni file, or device: dummy, openni2[:URI], freenect[:INDEX]")
       ->required();
   cmd->add_option("--camera", args->camera_file, "camera.json to use instead of INPUT/camera.json");
   cmd->add_option("--depth-dir", args->depth_folder,
@@ -48,6 +50,20 @@ void RegisterCommands(CLI::App& app) {
       progress.Finish();
       std::cout << info.dump(2) << std::endl;
     });
+  }
+  {
+    auto options = std::make_shared<CaptureOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "capture", "record a device (or .oni file) to a TUM-format folder for offline processing");
+    cmd->add_option(
+           "--device", options->device,
+           "dummy (OpenNI2's software device), openni2[:URI], freenect[:INDEX], or FILE.oni")
+        ->required();
+    cmd->add_option("--out", options->out_dir, "TUM folder to create")->required();
+    cmd->add_option("--frames", options->frames, "frames to record (0 = until the end or Ctrl-C)")
+        ->capture_default_str();
+    cmd->add_option("--camera", options->camera_file, "camera.json to use instead of the device's");
+    cmd->callback([options] { RunCapture(*options); });
   }
   {
     auto out = std::make_shared<std::string>("demo-out");

@@ -2,6 +2,7 @@
 //
 // Exit codes: 0 success, 1 internal error, 2 bad input or usage (one line "error: <file>:
 // <problem>").
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -12,6 +13,8 @@
 #include "apps/commands.h"
 
 int main(int argc, char** argv) {
+  // stdout carries results (JSON for info); logs go to stderr.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("glassfusion"));
   spdlog::set_pattern("[%l] %v");
   spdlog::set_level(spdlog::level::warn);
   CLI::App app{

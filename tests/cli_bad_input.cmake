@@ -34,5 +34,32 @@ file(WRITE "${tmp}/camera.json"
      "{\"width\": 8, \"height\": 6, \"fx\": 10, \"fy\": 10, \"cx\": 3.5, \"cy\": 2.5, \"depth_scale\": 5000}")
 file(WRITE "${tmp}/depth/1.png" "garbage")
 expect_error("^error: .*depth/1.png: cannot decode depth image" info "${tmp}")
+
+# A real TUM folder written by capture, then damaged in three ways.
+execute_process(COMMAND "${GLASSFUSION}" capture --device dummy --out "${tmp}/good" --frames 3
+                RESULT_VARIABLE rc OUTPUT_QUIET ERROR_QUIET)
+if(rc EQUAL 0)
+  file(GLOB depths "${tmp}/good/depth/*.png")
+  list(GET depths 2 third)
+  # 1. Capturing (re-recording) it with a corrupt third depth image: error, and no output folder.
+  file(COPY "${third}" DESTINATION "${tmp}")
+  file(WRITE "${third}" "not a png")
+  expect_error("^error: .*depth/.*png: cannot decode depth image" capture --device "${tmp}/good"
+               --out "${tmp}/copy")
+  if(EXISTS "${tmp}/copy")
+    message(FATAL_ERROR "a failed capture left ${tmp}/copy behind")
+  endif()
+  file(GLOB partial "${tmp}/copy.partial-*")
+  if(partial)
+    message(FATAL_ERROR "a failed capture left ${partial} behind")
+  endif()
+  # 2. A depth image of the wrong size.
+  file(WRITE "${tmp}/good/camera.json"
+       "{\"width\": 640, \"height\": 480, \"fx\": 525, \"fy\": 525, \"cx\": 319.5, \"cy\": 239.5, \"depth_scale\": 5000}")
+  expect_error("^error: .*depth/.*png: depth image is 320x240 but the camera is 640x480$"
+               info "${tmp}/good")
+else()
+  message("OpenNI2 Dummy capture unavailable; capture cases not checked")
+endif()
 file(REMOVE_RECURSE "${tmp}")
 message("bad input handled")

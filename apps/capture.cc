@@ -1,0 +1,58 @@
+#include "apps/capture.h"
+
+#include <atomic>
+#include <csignal>
+#include <iostream>
+
+#include "acquisition/errors.h"
+#include "acquisition/frame_sink.h"
+#include "acquisition/frame_source.h"
+#include "apps/progress.h"
+
+namespace gf {
+namespace {
+std::atomic<bool> g_stop{false};
+extern "C" void OnInterrupt(int) { g_stop = true; }
+}  // namespace
+
+bool CaptureOptions::Check(std::string* message) const {
+  if (device.empty() || out_dir.empty() || frames < 0) {
+    if (message) *message = "need --device, --out and --frames >= 0";
+    return false;
+  }
+  return true;
+}
+
+int RunCapture(const CaptureOptions& options) {
+  std::string problem;
+  if (!options.Check(&problem)) throw InputError("capture", problem);
+  FrameSourceOptions source_options;
+  source_options.camera_file = options.camera_file;
+  std::unique_ptr<FrameSource> source = OpenFrameSource(options.device, source_options);
+  TumFolderSink sink(options.out_dir, source->camera_file());
+  std::optional<int> total =
+      options.frames > 0 ? std::optional<int>(options.frames) : source->FrameCount();
+  g_stop = false;
+  auto previous = std::signal(SIGINT, OnInterrupt);
+  TerminalProgress progress("capture", total);
+  RgbdFrame frame;
+  try {
+    while (!g_stop && (options.frames == 0 || sink.frames_written() < options.frames) &&
+           source->Next(&frame)) {
+      sink.Write(frame);
+      progress.Update(sink.frames_written());
+    }
+  } catch (...) {
+    std::signal(SIGINT, previous);
+    throw;
+  }
+  std::signal(SIGINT, previous);
+  progress.Finish();
+  if (sink.frames_written() == 0) throw InputError(options.device, "delivered no frames");
+  sink.Close();
+  std::cout << "capture: " << sink.frames_written() << " frames written to " << options.out_dir
+            << std::endl;
+  return sink.frames_written();
+}
+
+}  // namespace gf
