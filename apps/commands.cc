@@ -6,6 +6,7 @@
 #include "apps/demo.h"
 #include "apps/info.h"
 #include "apps/progress.h"
+#include "datasets/synth.h"
 
 namespace gf {
 namespace {
@@ -52,6 +53,25 @@ void RegisterCommands(CLI::App& app) {
     });
   }
   {
+    auto options = std::make_shared<synth::SynthOptions>();
+    auto out = std::make_shared<std::string>();
+    CLI::App* cmd = app.add_subcommand(
+        "synth", "render a synthetic Kinect v1 glass scene with ground truth into a TUM folder");
+    cmd->add_option("--scene", options->scene, "glass-table or shelf")->capture_default_str();
+    cmd->add_option("--frames", options->frames, "frames to render")->capture_default_str();
+    cmd->add_option("--seed", options->seed, "textures, trajectory and noise")
+        ->capture_default_str();
+    cmd->add_flag("--loop", options->loop, "trajectory comes back to its start");
+    cmd->add_option("--out", *out, "folder to create")->required();
+    cmd->callback([options, out] {
+      TerminalProgress progress("synth", options->frames);
+      const synth::SynthSummary s =
+          synth::GenerateDataset(*options, *out, [&](int done, int) { progress.Update(done); });
+      progress.Finish();
+      std::cout << "synth: " << s.BriefReport() << "; written to " << *out << std::endl;
+    });
+  }
+  {
     auto options = std::make_shared<CaptureOptions>();
     CLI::App* cmd = app.add_subcommand(
         "capture", "record a device (or .oni file) to a TUM-format folder for offline processing");
@@ -66,13 +86,15 @@ void RegisterCommands(CLI::App& app) {
     cmd->callback([options] { RunCapture(*options); });
   }
   {
-    auto out = std::make_shared<std::string>("demo-out");
-    auto data = std::make_shared<std::string>();
-    CLI::App* cmd = app.add_subcommand("demo", "run the built-in demo and write OUT/report.html");
-    cmd->add_option("--out", *out, "output folder")->capture_default_str();
-    cmd->add_option("--data", *data,
-                    "folder of datasets to summarise (default ../shared/datasets)");
-    cmd->callback([out, data] { RunDemo(*out, *data); });
+    auto options = std::make_shared<DemoOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "demo", "generate the built-in glass scene, measure its holes, write OUT/report.html");
+    cmd->add_option("--out", options->out_dir, "output folder")->capture_default_str();
+    cmd->add_option("--frames", options->frames, "frames of the glass scene")
+        ->capture_default_str();
+    cmd->add_option("--data", options->data_dir,
+                    "folder of datasets to summarise too (default ../shared/datasets if present)");
+    cmd->callback([options] { RunDemo(*options); });
   }
 }
 

@@ -3,12 +3,16 @@
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "acquisition/image_io.h"
 #include "apps/info.h"
 #include "apps/progress.h"
+#include "datasets/synth.h"
 
 namespace fs = std::filesystem;
 
@@ -42,59 +46,158 @@ std::string Percent(double f) {
   return s.str();
 }
 
+// Colour | depth (jet, black = none) | holes over colour (red no return, blue shadow, green out of
+// range): what a person should look at to see what the sensor misses.
+cv::Mat Overview(const RgbdFrame& frame) {
+  cv::Mat depth8;
+  frame.depth.convertTo(depth8, CV_8U, 255.0 / 4.0);
+  cv::Mat depth_color;
+  cv::applyColorMap(depth8, depth_color, cv::COLORMAP_JET);
+  depth_color.setTo(cv::Scalar(0, 0, 0), frame.depth == 0);
+  cv::Mat holes = frame.color.clone();
+  holes.setTo(cv::Scalar(0, 0, 255), frame.hole_mask == static_cast<uint8_t>(HoleCode::kNoReturn));
+  holes.setTo(cv::Scalar(255, 0, 0), frame.hole_mask == static_cast<uint8_t>(HoleCode::kShadow));
+  holes.setTo(cv::Scalar(0, 200, 0),
+              frame.hole_mask == static_cast<uint8_t>(HoleCode::kOutOfRange));
+  cv::Mat row;
+  cv::hconcat(std::vector<cv::Mat>{frame.color, depth_color, holes}, row);
+  cv::resize(row, row, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
+  return row;
+}
+
 }  // namespace
 
-void RunDemo(const std::string& out_dir, const std::string& data_dir_arg) {
-  const std::string data_dir = data_dir_arg.empty() ? "../shared/datasets" : data_dir_arg;
-  std::error_code ec;
-  fs::create_directories(out_dir, ec);
-  if (ec) throw InputError(out_dir, "cannot create output folder: " + ec.message());
+bool DemoOptions::Check(std::string* message) const {
+  if (out_dir.empty() || frames < 2) {
+    if (message) *message = "need an output folder and at least 2 frames";
+    return false;
+  }
+  return true;
+}
 
-  nlohmann::ordered_json report;
-  report["data"] = data_dir;
-  report["inputs"] = nlohmann::json::array();
+void RunDemo(const DemoOptions& options) {
+  std::string problem;
+  if (!options.Check(&problem)) throw InputError("demo", problem);
+  std::error_code ec;
+  fs::create_directories(options.out_dir, ec);
+  if (ec) throw InputError(options.out_dir, "cannot create output folder: " + ec.message());
+  const std::string scene_dir = (fs::path(options.out_dir) / "glass-table").string();
+  // A previous demo's scene is replaced; anything else in the way is not ours to delete.
+  if (fs::exists(scene_dir)) {
+    if (!IsRegularFile((fs::path(scene_dir) / "synth.json").string()))
+      throw InputError(scene_dir, "exists and is not a GlassFusion synthetic dataset");
+    fs::remove_all(scene_dir);
+  }
+
+  // 1. The built-in glass scene.
+  synth::SynthOptions synth_options;
+  synth_options.scene = "glass-table";
+  synth_options.frames = options.frames;
+  synth_options.seed = 1;
+  synth::SynthSummary synth_summary;
+  {
+    TerminalProgress progress("demo: rendering glass-table", options.frames);
+    synth_summary = synth::GenerateDataset(synth_options, scene_dir,
+                                           [&](int done, int) { progress.Update(done); });
+  }
+
+  // 2. Read it back as any capture is read, and measure holes per material against ground truth.
+  FrameSourceOptions source_options;
+  auto source = OpenFrameSource(scene_dir, source_options);
+  std::vector<size_t> material_holes(5, 0), material_pixels(5, 0);
+  RgbdFrame frame, first;
+  while (source->Next(&frame)) {
+    const cv::Mat label =
+        cv::imread((fs::path(scene_dir) / "gt/label" / (frame.timestamp_text + ".png")).string(),
+                   cv::IMREAD_UNCHANGED);
+    if (label.empty())
+      throw InputError(scene_dir, "ground-truth label of " + frame.timestamp_text + " missing");
+    for (int v = 0; v < label.rows; ++v)
+      for (int u = 0; u < label.cols; ++u) {
+        const int m = label.at<uint8_t>(v, u);
+        if (m >= 5) continue;
+        ++material_pixels[m];
+        material_holes[m] += frame.hole_mask.at<uint8_t>(v, u) != 0;
+      }
+    if (frame.index == 0) first = frame;
+  }
+  WriteImage((fs::path(options.out_dir) / "overview.png").string(), Overview(first));
+  const auto scene_info = InputInfo(scene_dir, source_options);
+
+  // 3. Real datasets, when they are on this machine.
+  std::string data_dir = options.data_dir;
+  if (data_dir.empty() && IsDirectory("../shared/datasets")) data_dir = "../shared/datasets";
   std::vector<std::string> inputs;
-  if (IsDirectory(data_dir)) {
+  if (!data_dir.empty() && IsDirectory(data_dir))
     for (const auto& e : fs::directory_iterator(data_dir))
       if (e.is_directory() && !DetectInputKind(e.path().string()).empty())
         inputs.push_back(e.path().string());
-  }
   std::sort(inputs.begin(), inputs.end());
+
+  nlohmann::ordered_json report;
+  report["scene"] = {{"name", "glass-table"},
+                     {"frames", options.frames},
+                     {"folder", scene_dir},
+                     {"generation_ms_per_frame", 1000.0 * synth_summary.seconds_per_frame},
+                     {"info", scene_info}};
+  nlohmann::ordered_json per_material = nlohmann::ordered_json::object();
+  for (int m = 0; m < 5; ++m)
+    per_material[synth::MaterialName(static_cast<synth::Material>(m))] = {
+        {"pixels", material_pixels[m]},
+        {"hole_fraction",
+         material_pixels[m] ? static_cast<double>(material_holes[m]) / material_pixels[m] : 0.0}};
+  report["holes_by_material"] = per_material;
+  report["datasets"] = nlohmann::json::array();
   for (const std::string& input : inputs) {
     TerminalProgress progress("demo: " + fs::path(input).filename().string(), std::nullopt);
-    report["inputs"].push_back(InputInfo(input, {}, [&](int d, int) { progress.Update(d); }));
+    report["datasets"].push_back(InputInfo(input, {}, [&](int d, int) { progress.Update(d); }));
   }
+  report["not_yet_built"] = {"tracking", "stereo fill", "surfel fusion", "completeness comparison"};
 
   std::ostringstream html;
   html << "<!doctype html><html><head><meta charset=\"utf-8\"><title>GlassFusion demo</title>"
-          "<style>body{font-family:sans-serif;margin:2em}td,th{padding:4px 10px;border-bottom:1px "
-          "solid #ccc;text-align:right}td:first-child,th:first-child{text-align:left}</style>"
-          "</head><body><h1>GlassFusion demo</h1>";
-  html << "<p>Depth holes in the inputs found under <code>" << HtmlEscape(data_dir)
-       << "</code>. These holes (no return on glass, specular and dark surfaces) are what "
-          "GlassFusion's stereo fill targets. Reconstruction and stereo fill are not built yet; "
-          "this report grows with the pipeline.</p>";
-  if (inputs.empty()) {
-    html << "<p><b>No readable dataset folders found.</b></p>";
-  } else {
-    html << "<table><tr><th>input</th><th>kind</th><th>frames</th><th>size</th><th>depth</th>"
-            "<th>holes</th><th>no return</th><th>out of range</th></tr>";
-    for (const auto& j : report["inputs"]) {
+          "<style>body{font-family:sans-serif;margin:2em;max-width:70em}td,th{padding:4px 10px;"
+          "border-bottom:1px solid #ccc;text-align:right}td:first-child,th:first-child{text-align:"
+          "left}img{max-width:100%}</style></head><body><h1>GlassFusion demo</h1>";
+  html << "<h2>Built-in glass scene</h2><p>A synthetic Kinect v1 capture of a table with frosted "
+          "and clear glass, shiny metal and a matte black box ("
+       << options.frames << " frames, "
+       << static_cast<int>(1000.0 * synth_summary.seconds_per_frame)
+       << " ms per frame to render), read back through the same path as a real capture. "
+          "First frame: colour, depth, and the holes over the colour image (red: no return, "
+          "blue: projector shadow, green: out of range).</p><img src=\"overview.png\">";
+  html << "<h3>Sensor holes by material (ground truth labels)</h3><table><tr><th>material</th>"
+          "<th>pixels</th><th>holes</th></tr>";
+  for (int m = 0; m < 5; ++m)
+    html << "<tr><td>" << synth::MaterialName(static_cast<synth::Material>(m)) << "</td><td>"
+         << material_pixels[m] << "</td><td>"
+         << Percent(material_pixels[m] ? static_cast<double>(material_holes[m]) / material_pixels[m]
+                                       : 0)
+         << "</td></tr>";
+  html
+      << "</table><p>These holes are what GlassFusion's stereo fill targets. Tracking, stereo fill "
+         "and surfel fusion are not built yet; the report grows with the pipeline.</p>";
+  if (!inputs.empty()) {
+    html << "<h2>Datasets found under <code>" << HtmlEscape(data_dir) << "</code></h2>"
+         << "<table><tr><th>input</th><th>kind</th><th>frames</th><th>size</th><th>depth</th>"
+            "<th>holes</th><th>no return</th><th>shadow</th><th>out of range</th></tr>";
+    for (const auto& j : report["datasets"]) {
       html << "<tr><td>" << HtmlEscape(fs::path(j["input"].get<std::string>()).filename().string())
            << "</td><td>" << j["source"].get<std::string>() << "</td><td>" << j["frames"]
            << "</td><td>" << j["width"] << "x" << j["height"] << "</td><td>"
            << j["depth_convention"].get<std::string>() << "</td><td>" << Percent(j["hole_fraction"])
            << "</td><td>" << Percent(j["holes"]["no_return"]) << "</td><td>"
-           << Percent(j["holes"]["out_of_range"]) << "</td></tr>";
+           << Percent(j["holes"]["shadow"]) << "</td><td>" << Percent(j["holes"]["out_of_range"])
+           << "</td></tr>";
     }
     html << "</table>";
   }
   html << "</body></html>\n";
-
-  WriteTextFileAtomically((fs::path(out_dir) / "report.json").string(), report.dump(2) + "\n");
-  WriteTextFileAtomically((fs::path(out_dir) / "report.html").string(), html.str());
-  std::cout << "demo: " << inputs.size() << " inputs summarised; report in "
-            << (fs::path(out_dir) / "report.html").string() << std::endl;
+  WriteTextFileAtomically((fs::path(options.out_dir) / "report.json").string(),
+                          report.dump(2) + "\n");
+  WriteTextFileAtomically((fs::path(options.out_dir) / "report.html").string(), html.str());
+  std::cout << "demo: glass-table " << synth_summary.BriefReport() << "; report in "
+            << (fs::path(options.out_dir) / "report.html").string() << std::endl;
 }
 
 }  // namespace gf

@@ -1,15 +1,23 @@
 // `glassfusion demo`: the built-in demonstration behind `make demo`.
 //
-// Current scope: the reconstruction stages are not built yet, so the demo summarises every dataset
-// folder it can read (frames, size, depth convention, hole fractions: the holes GlassFusion exists
-// to fill) into OUT/report.json and OUT/report.html. It grows with the pipeline.
+// Generates the built-in glass scene (synthetic Kinect v1, `glass-table`, with ground truth) into
+// OUT/glass-table, reads it back through the same frame source a user's capture goes through, and
+// writes OUT/report.json and OUT/report.html: the sensor's holes per material (what the stereo
+// fill exists for), an overview image of the first frame, and the holes of every dataset folder
+// found under --data. Reconstruction and stereo fill join the report as the pipeline lands.
 #pragma once
 
 #include <string>
 
 namespace gf {
 
-// data_dir: folder of dataset folders; "" = ../shared/datasets relative to the working directory.
-void RunDemo(const std::string& out_dir, const std::string& data_dir);
+struct DemoOptions {
+  std::string out_dir = "demo-out";
+  std::string data_dir;  // "" = ../shared/datasets when present
+  int frames = 30;       // frames of the glass scene
+  bool Check(std::string* message = nullptr) const;
+};
+
+void RunDemo(const DemoOptions& options);
 
 }  // namespace gf

@@ -1,0 +1,346 @@
+#include "datasets/synth.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+
+#include "acquisition/depth.h"
+#include "acquisition/errors.h"
+#include "acquisition/file_util.h"
+#include "acquisition/frame_sink.h"
+#include "acquisition/image_io.h"
+#include "acquisition/trajectory.h"
+
+namespace fs = std::filesystem;
+
+namespace gf::synth {
+namespace {
+
+// Standard normal from two hashed uniforms (Box-Muller).
+double HashGaussian(int x, int y, int frame, uint32_t seed) {
+  const double u1 = std::max(1e-12, static_cast<double>(HashUniform(x, y, frame, seed)));
+  const double u2 = HashUniform(x, y, frame, seed ^ 0xA5A5A5A5u);
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+}
+
+std::string TimeText(double t) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.6f", t);
+  return buffer;
+}
+
+// Writes a 16-bit P5 PGM with little-endian samples, as libfreenect's fakenect record does.
+void WriteRawPgm(const std::string& path, const cv::Mat& raw) {
+  WriteFileAtomically(path, [&](const std::string& temporary) {
+    std::ofstream out(temporary, std::ios::binary);
+    out << "P5 " << raw.cols << " " << raw.rows << " 65535\n";
+    for (int y = 0; y < raw.rows; ++y) {
+      const uint16_t* r = raw.ptr<uint16_t>(y);
+      for (int x = 0; x < raw.cols; ++x)
+        out.put(static_cast<char>(r[x] & 0xFF)).put(static_cast<char>(r[x] >> 8));
+    }
+    if (!out) throw InputError(path, "write error");
+  });
+}
+
+cv::Mat MetresToPng(const cv::Mat& metres) {
+  return DepthToRaw(metres, DepthConvention::ScaledUnits(5000.0));
+}
+
+}  // namespace
+
+bool KinectModelOptions::Check(std::string* message) const {
+  if (!(min_depth_m > 0 && max_depth_m > min_depth_m && noise_a_m >= 0 && noise_b_per_m >= 0 &&
+        ir_return_probability >= 0 && ir_return_probability <= 1 && grazing_angle_deg > 0 &&
+        grazing_angle_deg <= 90)) {
+    if (message)
+      *message = "Kinect model: need 0 < min < max depth, noise >= 0, probability in [0,1]";
+    return false;
+  }
+  return true;
+}
+
+bool SynthOptions::Check(std::string* message) const {
+  const auto names = Scene::Names();
+  if (std::find(names.begin(), names.end(), scene) == names.end()) {
+    if (message) *message = "unknown scene \"" + scene + "\" (known: glass-table, shelf)";
+    return false;
+  }
+  if (frames < 1 || frames > 100000 || !(fps > 0) || !(degrees_per_frame >= 0) ||
+      !(jitter_m >= 0)) {
+    if (message) *message = "need 1 <= frames <= 100000, fps > 0, speed and jitter >= 0";
+    return false;
+  }
+  return kinect.Check(message);
+}
+
+Camera SynthCamera() { return Camera{}; }  // 640x480, fx = fy = 525, cx 319.5, cy 239.5
+
+std::vector<SE3> MakeTrajectory(const Scene& scene, const SynthOptions& options) {
+  std::vector<SE3> poses;
+  const int n = options.frames;
+  // Smooth handheld wobble: a few sines per axis with seeded phases. When looping, whole cycles
+  // over the sequence, so the last frame runs back into the first.
+  auto wobble = [&](int axis, double i, double amplitude) {
+    double sum = 0;
+    for (int k = 1; k <= 3; ++k) {
+      const double phase = 2 * M_PI * HashUniform(axis, k, 0, options.seed ^ 0x5EEDu);
+      const double cycles_per_frame =
+          options.loop ? static_cast<double>(k) / n
+                       : 0.01 + 0.03 * HashUniform(axis, k, 1, options.seed ^ 0x5EEDu);
+      sum += std::sin(2 * M_PI * cycles_per_frame * i + phase) / k;
+    }
+    return amplitude * sum / 1.83;  // 1 + 1/2 + 1/3
+  };
+  for (int i = 0; i < n; ++i) {
+    const double angle =
+        scene.orbit_center_angle() +
+        (options.loop ? 2 * M_PI * i / n
+                      : (i - (n - 1) / 2.0) * options.degrees_per_frame * M_PI / 180.0);
+    const Eigen::Vector3d eye =
+        scene.focus() +
+        Eigen::Vector3d(scene.orbit_radius() * std::cos(angle),
+                        scene.orbit_radius() * std::sin(angle),
+                        scene.eye_height() - scene.focus().z()) +
+        Eigen::Vector3d(wobble(0, i, options.jitter_m), wobble(1, i, options.jitter_m),
+                        wobble(2, i, options.jitter_m));
+    const Eigen::Vector3d target =
+        scene.focus() + Eigen::Vector3d(wobble(3, i, 2 * options.jitter_m),
+                                        wobble(4, i, 2 * options.jitter_m),
+                                        wobble(5, i, options.jitter_m));
+    const Eigen::Vector3d forward = (target - eye).normalized();
+    const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+    const Eigen::Vector3d down = forward.cross(right);
+    Eigen::Matrix3d r;
+    r.col(0) = right;
+    r.col(1) = down;
+    r.col(2) = forward;
+    poses.emplace_back(r, eye);
+  }
+  return poses;
+}
+
+SynthFrame RenderFrame(const Scene& scene, const Camera& camera, const SE3& world_from_camera,
+                       const KinectModelOptions& kinect, uint32_t seed, int frame_index) {
+  std::string problem;
+  GF_CHECK(kinect.Check(&problem), problem);
+  SynthFrame f;
+  f.world_from_camera = world_from_camera;
+  const int w = camera.width, h = camera.height;
+  f.color.create(h, w, CV_8UC3);
+  f.raw_disparity.create(h, w, CV_16UC1);
+  f.true_depth.create(h, w, CV_32FC1);
+  f.visible_depth.create(h, w, CV_32FC1);
+  f.label.create(h, w, CV_8UC1);
+  f.hole_reason.create(h, w, CV_8UC1);
+  const Eigen::Matrix3d R = world_from_camera.RotationMatrix();
+  const Eigen::Vector3d origin = world_from_camera.translation();
+  const Eigen::Vector3d projector =
+      world_from_camera * Eigen::Vector3d(kinect.projector_baseline_m, 0, 0);
+  const DepthConvention raw_model = DepthConvention::KinectV1Raw11Bit();
+  const double cos_grazing = std::cos(kinect.grazing_angle_deg * M_PI / 180.0);
+  const uint32_t noise_seed = seed * 2654435761u + 17u;
+
+  // Rows are independent and every random number is a hash of (pixel, frame, seed), so the
+  // result does not depend on how OpenCV splits the rows between its worker threads.
+  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      for (int u = 0; u < w; ++u) {
+        const Eigen::Vector3d ray_camera((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy,
+                                         1.0);
+        const double ray_norm = ray_camera.norm();
+        const Eigen::Vector3d dir = R * ray_camera / ray_norm;
+        Hit first;
+        uint16_t raw = DepthConvention::kKinectNoReturn;
+        uint8_t reason = static_cast<uint8_t>(HoleCode::kOutOfRange);
+        Eigen::Vector3f bgr = Eigen::Vector3f::Zero();
+        float true_z = 0.f, visible_z = 0.f;
+        uint8_t label = kNoSurface;
+        if (scene.Intersect(origin, dir, 1e-4, 1e3, false, &first)) {
+          const Surface& surface = scene.primitives()[first.primitive].surface;
+          label = static_cast<uint8_t>(surface.material);
+          true_z = static_cast<float>(first.t / ray_norm);
+          // What the colour camera sees.
+          if (surface.material == Material::kClearGlass) {
+            Hit behind;
+            if (scene.Intersect(origin, dir, first.t + 1e-4, 1e3, true, &behind)) {
+              visible_z = static_cast<float>(behind.t / ray_norm);
+              bgr = 0.82f * scene.Shade(behind, dir) + 0.18f * surface.base_bgr;
+            }
+            const Eigen::Vector3d reflected = dir - 2.0 * dir.dot(first.normal) * first.normal;
+            bgr += Eigen::Vector3f::Constant(
+                0.5f * static_cast<float>(
+                           std::pow(std::max(0.0, reflected.dot(Eigen::Vector3d::UnitZ())), 60.0)));
+          } else {
+            visible_z = true_z;
+            bgr = scene.Shade(first, dir);
+          }
+          // What the Kinect measures.
+          const double z = true_z;
+          const double incidence = -dir.dot(first.normal);
+          if (z < kinect.min_depth_m || z > kinect.max_depth_m) {
+            reason = static_cast<uint8_t>(HoleCode::kOutOfRange);
+          } else if (FailsInfrared(surface.material) &&
+                     HashUniform(u, v, frame_index, noise_seed ^ 0x1Eu) >=
+                         kinect.ir_return_probability) {
+            reason = static_cast<uint8_t>(HoleCode::kNoReturn);
+          } else if (incidence < cos_grazing) {
+            reason = static_cast<uint8_t>(HoleCode::kNoReturn);
+          } else {
+            const Eigen::Vector3d to_point = first.point - projector;
+            const double distance = to_point.norm();
+            Hit blocker;
+            if (scene.Intersect(projector, to_point / distance, 1e-4, distance - 1e-3, false,
+                                &blocker)) {
+              reason = static_cast<uint8_t>(HoleCode::kShadow);
+            } else {
+              const double sigma = kinect.noise_a_m + kinect.noise_b_per_m * (z - 0.4) * (z - 0.4);
+              const double noisy = z + sigma * HashGaussian(u, v, frame_index, noise_seed);
+              raw = raw_model.FromMetres(noisy);
+              reason = raw == DepthConvention::kKinectNoReturn
+                           ? static_cast<uint8_t>(HoleCode::kOutOfRange)
+                           : static_cast<uint8_t>(HoleCode::kValid);
+            }
+          }
+        }
+        // Colour sensor: 8-bit with a little noise.
+        cv::Vec3b& c = f.color.at<cv::Vec3b>(v, u);
+        for (int k = 0; k < 3; ++k) {
+          const double noise = 1.5 * HashGaussian(u, v, frame_index * 3 + k, noise_seed ^ 0xC0u);
+          c[k] = cv::saturate_cast<uint8_t>(255.0 * bgr[k] + noise);
+        }
+        f.raw_disparity.at<uint16_t>(v, u) = raw;
+        f.true_depth.at<float>(v, u) = true_z;
+        f.visible_depth.at<float>(v, u) = visible_z;
+        f.label.at<uint8_t>(v, u) = label;
+        f.hole_reason.at<uint8_t>(v, u) = reason;
+      }
+    }
+  });
+  return f;
+}
+
+std::string SynthSummary::BriefReport() const {
+  char buffer[160];
+  std::snprintf(buffer, sizeof(buffer), "%d frames, %.1f ms/frame, sensor hole fraction %.3f",
+                frames, 1000.0 * seconds_per_frame, hole_fraction);
+  return buffer;
+}
+
+SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out_dir,
+                             const std::function<void(int, int)>& progress) {
+  std::string problem;
+  if (!options.Check(&problem)) throw InputError(out_dir, "bad synth options: " + problem);
+  std::error_code ec;
+  if (fs::exists(out_dir, ec) && !(fs::is_directory(out_dir, ec) && fs::is_empty(out_dir, ec)))
+    throw InputError(out_dir, "already exists and is not empty; choose a new output folder");
+  fs::path final_path = fs::absolute(out_dir).lexically_normal();
+  if (final_path.filename().empty()) final_path = final_path.parent_path();
+  const fs::path stage = final_path.string() + ".partial-" + std::to_string(::getpid());
+  fs::remove_all(stage, ec);
+  for (const char* sub : {"raw", "gt/depth", "gt/visible_depth", "gt/label", "gt/holes"}) {
+    fs::create_directories(stage / sub, ec);
+    if (ec) throw InputError(out_dir, "cannot create output folder: " + ec.message());
+  }
+  // Anything that goes wrong below removes the staging folder.
+  struct Cleanup {
+    fs::path path;
+    bool armed = true;
+    ~Cleanup() {
+      std::error_code e;
+      if (armed) fs::remove_all(path, e);
+    }
+  } cleanup{stage};
+
+  const auto start = std::chrono::steady_clock::now();
+  const Scene scene = Scene::Make(options.scene, options.seed);
+  const Camera camera = SynthCamera();
+  CameraFile camera_file;
+  camera_file.camera = camera;
+  camera_file.depth_scale = 5000.0;
+  const std::vector<SE3> poses = MakeTrajectory(scene, options);
+
+  SynthSummary summary;
+  Trajectory groundtruth;
+  std::ostringstream index;
+  size_t hole_pixels = 0, pixels = 0;
+  {
+    TumFolderSink sink((stage / "tum").string(), camera_file);
+    for (int i = 0; i < options.frames; ++i) {
+      SynthFrame f = RenderFrame(scene, camera, poses[i], options.kinect, options.seed, i);
+      const double t = i / options.fps;
+      const std::string ts = TimeText(t);
+      RgbdFrame frame;
+      frame.index = i;
+      frame.timestamp = frame.color_timestamp = t;
+      frame.timestamp_text = ts;
+      frame.color = f.color;
+      ConvertDepth(f.raw_disparity, DepthConvention::KinectV1Raw11Bit(), {}, &frame.depth,
+                   &frame.hole_mask);
+      sink.Write(frame);
+      const std::string counter = std::to_string(i);
+      WriteRawPgm((stage / "raw" / ("d-" + ts + "-" + counter + ".pgm")).string(), f.raw_disparity);
+      WriteImage((stage / "raw" / ("r-" + ts + "-" + counter + ".ppm")).string(), f.color);
+      index << "d-" << ts << "-" << counter << ".pgm\n"
+            << "r-" << ts << "-" << counter << ".ppm\n";
+      WriteImage((stage / "gt/depth" / (ts + ".png")).string(), MetresToPng(f.true_depth));
+      WriteImage((stage / "gt/visible_depth" / (ts + ".png")).string(),
+                 MetresToPng(f.visible_depth));
+      WriteImage((stage / "gt/label" / (ts + ".png")).string(), f.label);
+      WriteImage((stage / "gt/holes" / (ts + ".png")).string(), f.hole_reason);
+      groundtruth.push_back({t, ts, poses[i]});
+      hole_pixels += cv::countNonZero(f.raw_disparity == DepthConvention::kKinectNoReturn);
+      pixels += f.raw_disparity.total();
+      if (progress) progress(i + 1, options.frames);
+    }
+    sink.Close();
+  }
+  // Lift the TUM part to the top of the folder.
+  for (const auto& e : fs::directory_iterator(stage / "tum"))
+    fs::rename(e.path(), stage / e.path().filename());
+  fs::remove(stage / "tum");
+  WriteTextFileAtomically((stage / "raw/INDEX.txt").string(), index.str());
+  SaveCameraFile((stage / "raw/camera.json").string(), camera_file);
+  WriteTumTrajectory((stage / "groundtruth.txt").string(), groundtruth);
+  scene.WritePly((stage / "scene.ply").string());
+
+  summary.frames = options.frames;
+  summary.seconds_per_frame =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
+      options.frames;
+  summary.hole_fraction = pixels ? static_cast<double>(hole_pixels) / pixels : 0.0;
+  nlohmann::ordered_json j;
+  j["scene"] = options.scene;
+  j["seed"] = options.seed;
+  j["frames"] = options.frames;
+  j["loop"] = options.loop;
+  j["fps"] = options.fps;
+  j["kinect"] = {{"projector_baseline_m", options.kinect.projector_baseline_m},
+                 {"min_depth_m", options.kinect.min_depth_m},
+                 {"max_depth_m", options.kinect.max_depth_m},
+                 {"noise_sigma_m", "a + b (z - 0.4)^2"},
+                 {"noise_a_m", options.kinect.noise_a_m},
+                 {"noise_b_per_m", options.kinect.noise_b_per_m},
+                 {"ir_return_probability", options.kinect.ir_return_probability}};
+  j["materials"] = {"diffuse", "glossy", "dark", "textured_glass", "clear_glass"};
+  j["sensor_hole_fraction"] = summary.hole_fraction;
+  j["seconds_per_frame"] = summary.seconds_per_frame;
+  WriteTextFileAtomically((stage / "synth.json").string(), j.dump(2) + "\n");
+
+  if (fs::exists(final_path, ec)) fs::remove(final_path, ec);  // the empty folder checked above
+  fs::rename(stage, final_path, ec);
+  if (ec)
+    throw InputError(out_dir, "cannot move the generated dataset into place: " + ec.message());
+  cleanup.armed = false;
+  return summary;
+}
+
+}  // namespace gf::synth

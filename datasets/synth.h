@@ -1,0 +1,92 @@
+// The synthetic Kinect v1 dataset generator behind `glassfusion synth` and `make demo`.
+//
+// Renders a Scene along a handheld-like trajectory and simulates a Kinect v1:
+//  - 640x480, depth registered to colour (one pinhole camera, fx = fy = 525);
+//  - a projector 7.5 cm along the camera's +x axis: surface points it cannot light are shadows;
+//  - depth noise growing with the square of depth, sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 metres
+//    (Nguyen, Izadi, Lovell, 3DIMPVT 2012), then quantisation through the 11-bit raw disparity
+//    value (one raw step is about 1/8 pixel of disparity, DepthConvention::KinectV1Raw11Bit);
+//  - range 0.5-4.5 m; raw value 2047 on IR-failing materials (a small share of their pixels still
+//    return, as real sensors do), out of range, in projector shadow, and at grazing angles.
+//
+// Output folder (written under a temporary name, renamed when complete):
+//   rgb/ depth/ rgb.txt depth.txt camera.json   a TUM RGB-D folder (16-bit depth, 5000 per metre)
+//   groundtruth.txt                             world_from_camera per frame (TUM format)
+//   raw/                                        fakenect recording: INDEX.txt, d-*.pgm (11-bit raw,
+//                                               little-endian), r-*.ppm, camera.json
+//   gt/depth/<ts>.png                           true depth of the first surface hit (glass too)
+//   gt/visible_depth/<ts>.png                   depth of what colour sees (through clear glass)
+//   gt/label/<ts>.png                           material of the first hit (synth::Material, 255
+//   none) gt/holes/<ts>.png                           why the sensor has no depth (HoleCode)
+//   scene.ply                                   the scene as a triangle mesh
+//   synth.json                                  scene, seed, options, generation time
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "acquisition/camera.h"
+#include "acquisition/se3.h"
+#include "datasets/scene.h"
+
+namespace gf::synth {
+
+struct KinectModelOptions {
+  double projector_baseline_m = 0.075;  // projector along the camera's +x axis, metres
+  double min_depth_m = 0.5;             // nearer surfaces read 2047, metres
+  double max_depth_m = 4.5;             // farther surfaces read 2047, metres
+  double noise_a_m = 0.0012;            // sigma(z) = a + b (z - 0.4)^2, metres
+  double noise_b_per_m = 0.0019;
+  double ir_return_probability = 0.03;  // share of IR-failing pixels that still return depth
+  double grazing_angle_deg = 82.0;      // steeper incidence drops the return
+  bool Check(std::string* message = nullptr) const;
+};
+
+struct SynthOptions {
+  std::string scene = "glass-table";  // Scene::Names()
+  int frames = 60;                    // frames to render
+  uint32_t seed = 1;                  // scene textures, trajectory jitter and sensor noise
+  bool loop = false;                  // the trajectory comes back to its start
+  double fps = 30.0;                  // timestamps step, frames per second
+  double degrees_per_frame = 0.6;     // orbit speed when not looping (about 1.6 cm/frame)
+  double jitter_m = 0.015;            // handheld wobble of the camera position, metres
+  KinectModelOptions kinect;
+  bool Check(std::string* message = nullptr) const;
+};
+
+// One rendered frame before it is written.
+struct SynthFrame {
+  double timestamp = 0;
+  SE3 world_from_camera;
+  cv::Mat color;          // CV_8UC3 BGR
+  cv::Mat raw_disparity;  // CV_16UC1 Kinect v1 11-bit raw, 2047 = no return
+  cv::Mat true_depth;     // CV_32FC1 metres to the first surface (0 = none)
+  cv::Mat visible_depth;  // CV_32FC1 metres to the first surface that is not clear glass
+  cv::Mat label;          // CV_8UC1 Material of the first hit, kNoSurface where none
+  cv::Mat hole_reason;    // CV_8UC1 HoleCode: why raw_disparity is 2047
+};
+
+// The camera every synthetic dataset uses (640x480, fx = fy = 525, no distortion).
+Camera SynthCamera();
+// world_from_camera of frame i.
+std::vector<SE3> MakeTrajectory(const Scene& scene, const SynthOptions& options);
+// Renders one frame; frame_index seeds its sensor noise.
+SynthFrame RenderFrame(const Scene& scene, const Camera& camera, const SE3& world_from_camera,
+                       const KinectModelOptions& kinect, uint32_t seed, int frame_index);
+
+struct SynthSummary {
+  int frames = 0;
+  double seconds_per_frame = 0;  // render + write, wall clock
+  double hole_fraction = 0;      // share of sensor pixels at 2047
+  std::string BriefReport() const;
+};
+
+// Generates the whole folder. progress(done, total) after each frame. Throws InputError when
+// out_dir exists and is not empty, or on write errors (nothing is left behind).
+SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out_dir,
+                             const std::function<void(int, int)>& progress = {});
+
+}  // namespace gf::synth
