@@ -413,7 +413,7 @@ void Scene::WritePly(const std::string& path) const {
         const int n = 24;
         for (int i = 0; i < n; ++i) {
           for (int j = 0; j < 2 * n; ++j) {
-            auto at = [&](int a, int b) {
+            auto at = [&](int a, int b) -> Eigen::Vector3d {
               const double th = M_PI * a / n, ph = M_PI * b / n;
               return p.center + p.radius * Eigen::Vector3d(std::sin(th) * std::cos(ph),
                                                            std::sin(th) * std::sin(ph),

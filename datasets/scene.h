@@ -54,9 +54,9 @@ struct Primitive {
 };
 
 struct Hit {
-  double t = 0;            // distance along the (unit) ray, metres
-  Eigen::Vector3d point;   // in world
-  Eigen::Vector3d normal;  // unit, facing the ray origin
+  double t = 0;                                       // distance along the (unit) ray, metres
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();    // in world
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, facing the ray origin
   int primitive = -1;
 };
 

@@ -186,7 +186,7 @@ TEST(GenerateDataset, SameSeedSameBytesAndReadableByEveryReader) {
   EXPECT_EQ(files_a.count("raw/d-0.033333-1.pgm"), 1u);
 
   // The TUM folder and the fakenect recording read back with the same holes.
-  for (const std::string input : {dir / "a", dir / "a/raw"}) {
+  for (const std::string& input : {dir / "a", dir / "a/raw"}) {
     auto source = OpenFrameSource(input, {});
     EXPECT_EQ(source->FrameCount().value(), 2) << input;
     RgbdFrame frame;
