@@ -2,6 +2,8 @@
 
 #include <iostream>
 
+#include "acquisition/errors.h"
+#include "acquisition/trajectory_metrics.h"
 #include "apps/capture.h"
 #include "apps/demo.h"
 #include "apps/info.h"
@@ -69,6 +71,35 @@ void RegisterCommands(CLI::App& app) {
           synth::GenerateDataset(*options, *out, [&](int done, int) { progress.Update(done); });
       progress.Finish();
       std::cout << "synth: " << s.BriefReport() << "; written to " << *out << std::endl;
+    });
+  }
+  {
+    auto gt = std::make_shared<std::string>();
+    auto est = std::make_shared<std::string>();
+    auto options = std::make_shared<TrajectoryErrorOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "eval", "trajectory error of --est against --gt as JSON (ATE after rigid alignment, RPE)");
+    cmd->add_option("--gt", *gt, "ground truth: TUM text or Redwood .log")->required();
+    cmd->add_option("--est", *est, "estimate: TUM text or Redwood .log")->required();
+    cmd->add_option("--max-dt", options->max_dt, "association window, seconds")
+        ->capture_default_str();
+    cmd->callback([gt, est, options] {
+      std::string problem;
+      if (!options->Check(&problem)) throw InputError("--max-dt", problem);
+      const TrajectoryErrorSummary s =
+          EvaluateTrajectory(ReadTrajectory(*gt), ReadTrajectory(*est), *options);
+      if (!s.success) throw InputError(*est, s.message + " with " + *gt);
+      nlohmann::ordered_json j;
+      j["gt"] = *gt;
+      j["est"] = *est;
+      j["pairs"] = s.pairs;
+      j["ate_rmse_m"] = s.ate_rmse_m;
+      j["ate_mean_m"] = s.ate_mean_m;
+      j["ate_median_m"] = s.ate_median_m;
+      j["ate_max_m"] = s.ate_max_m;
+      j["rpe_trans_rmse_m"] = s.rpe_trans_rmse_m;
+      j["rpe_rot_rmse_deg"] = s.rpe_rot_rmse_deg;
+      std::cout << j.dump(2) << std::endl;
     });
   }
   {
