@@ -220,13 +220,39 @@ class OpenNI2Source : public FrameSource {
 
   bool Next(RgbdFrame* frame) override {
     if (frame_count_ >= 0 && next_index_ >= frame_count_) return false;
-    openni::VideoFrameRef depth;
-    if (!OpenNI2Device::Read(dev_.depth, openni2_.timeout_ms, &depth))
-      throw InputError(dev_.name, "no depth frame within " + std::to_string(openni2_.timeout_ms) +
-                                      " ms (frame " + std::to_string(next_index_) +
-                                      (frame_count_ >= 0 ? " of " + std::to_string(frame_count_)
-                                                         : std::string()) +
-                                      "); recording truncated or player stalled");
+    openni::VideoFrameRef depth, color;
+    auto read_depth = [&] {
+      if (!OpenNI2Device::Read(dev_.depth, openni2_.timeout_ms, &depth))
+        throw InputError(dev_.name, "no depth frame within " + std::to_string(openni2_.timeout_ms) +
+                                        " ms (frame " + std::to_string(next_index_) +
+                                        (frame_count_ >= 0 ? " of " + std::to_string(frame_count_)
+                                                           : std::string()) +
+                                        "); recording truncated or player stalled");
+    };
+    auto read_color = [&] {
+      if (!OpenNI2Device::Read(dev_.color, openni2_.timeout_ms, &color))
+        throw InputError(dev_.name,
+                         "no colour frame within " + std::to_string(openni2_.timeout_ms) + " ms");
+    };
+    read_depth();
+    if (dev_.has_color) {
+      read_color();
+      // The two streams run independently: drop whichever lags by more than half a frame so the
+      // pair shows one moment (live devices only; a recording keeps every depth frame).
+      const int fps = std::max(1, dev_.depth->getVideoMode().getFps());
+      const int64_t half_frame_us = 500000 / fps;
+      for (int tries = 0; tries < 8; ++tries) {
+        const int64_t dt =
+            static_cast<int64_t>(color.getTimestamp()) - static_cast<int64_t>(depth.getTimestamp());
+        if (dt < -half_frame_us) {
+          read_color();
+        } else if (dt > half_frame_us && frame_count_ < 0) {
+          read_depth();
+        } else {
+          break;
+        }
+      }
+    }
     RgbdFrame f;
     f.index = next_index_;
     f.timestamp = depth.getTimestamp() * 1e-6;
@@ -238,10 +264,6 @@ class OpenNI2Source : public FrameSource {
     ProcessRawDepth(raw.clone(), dev_.name + " depth frame " + std::to_string(next_index_), camera_,
                     convention_, options_, &f);
     if (dev_.has_color) {
-      openni::VideoFrameRef color;
-      if (!OpenNI2Device::Read(dev_.color, openni2_.timeout_ms, &color))
-        throw InputError(dev_.name,
-                         "no colour frame within " + std::to_string(openni2_.timeout_ms) + " ms");
       if (color.getVideoMode().getPixelFormat() != openni::PIXEL_FORMAT_RGB888)
         throw InputError(dev_.name, "unsupported colour pixel format " +
                                         std::to_string(color.getVideoMode().getPixelFormat()));

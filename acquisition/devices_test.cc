@@ -101,8 +101,10 @@ TEST(OpenNI2, RecordsOniFromTheDummyDevice) {
   auto source = OpenOpenNI2Source(oni, {}, quick);
   EXPECT_EQ(source->Kind(), "oni");
   ASSERT_TRUE(source->FrameCount().has_value());
+  // The recorder keeps every frame the running device delivers between start and stop: about
+  // the frames read, more on a loaded machine.
   EXPECT_GE(*source->FrameCount(), 3);
-  EXPECT_LE(*source->FrameCount(), 5);
+  EXPECT_LE(*source->FrameCount(), 15);
   RgbdFrame frame;
   try {
     ASSERT_TRUE(source->Next(&frame));

@@ -1,11 +1,10 @@
 #include "acquisition/trajectory_metrics.h"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <set>
-
-#include <Eigen/SVD>
 
 #include "acquisition/errors.h"
 
@@ -58,7 +57,8 @@ std::vector<std::pair<size_t, size_t>> AssociatePoses(const Trajectory& gt, cons
   return pairs;
 }
 
-SE3 AlignPoints(const std::vector<Eigen::Vector3d>& model, const std::vector<Eigen::Vector3d>& data) {
+SE3 AlignPoints(const std::vector<Eigen::Vector3d>& model,
+                const std::vector<Eigen::Vector3d>& data) {
   GF_CHECK(model.size() == data.size() && model.size() >= 3, "need >= 3 corresponding points");
   Eigen::Vector3d mu_m = Eigen::Vector3d::Zero(), mu_d = Eigen::Vector3d::Zero();
   for (size_t i = 0; i < model.size(); ++i) {
@@ -110,8 +110,8 @@ TrajectoryErrorSummary EvaluateTrajectory(const Trajectory& gt, const Trajectory
   s.ate_median_m = n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
   double trans2 = 0, rot2 = 0;
   for (size_t i = 0; i + 1 < pairs.size(); ++i) {
-    const SE3 gt_motion = gt[pairs[i].first].world_from_camera.Inverse() *
-                          gt[pairs[i + 1].first].world_from_camera;
+    const SE3 gt_motion =
+        gt[pairs[i].first].world_from_camera.Inverse() * gt[pairs[i + 1].first].world_from_camera;
     const SE3 est_motion = est[pairs[i].second].world_from_camera.Inverse() *
                            est[pairs[i + 1].second].world_from_camera;
     const SE3 error = gt_motion.Inverse() * est_motion;

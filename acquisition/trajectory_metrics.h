@@ -23,13 +23,13 @@ struct TrajectoryErrorOptions {
 };
 
 struct TrajectoryErrorSummary {
-  bool success = false;     // false when fewer than 3 poses associate
-  std::string message;      // why not, when success is false
+  bool success = false;  // false when fewer than 3 poses associate
+  std::string message;   // why not, when success is false
   int pairs = 0;
   double ate_rmse_m = 0, ate_mean_m = 0, ate_median_m = 0, ate_max_m = 0;
-  double rpe_trans_rmse_m = 0;    // per associated frame step
+  double rpe_trans_rmse_m = 0;  // per associated frame step
   double rpe_rot_rmse_deg = 0;
-  SE3 gt_from_estimate;           // the aligning transform
+  SE3 gt_from_estimate;  // the aligning transform
   std::string BriefReport() const;
 };
 
@@ -38,7 +38,8 @@ std::vector<std::pair<size_t, size_t>> AssociatePoses(const Trajectory& gt, cons
                                                       double max_dt);
 
 // Rigid transform minimising sum |model_i - (R data_i + t)|^2 (Umeyama 1991 without scale).
-SE3 AlignPoints(const std::vector<Eigen::Vector3d>& model, const std::vector<Eigen::Vector3d>& data);
+SE3 AlignPoints(const std::vector<Eigen::Vector3d>& model,
+                const std::vector<Eigen::Vector3d>& data);
 
 TrajectoryErrorSummary EvaluateTrajectory(const Trajectory& gt, const Trajectory& est,
                                           const TrajectoryErrorOptions& options = {});

@@ -1,8 +1,8 @@
 #include "acquisition/trajectory_metrics.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 #include "tests/testing.h"
 
@@ -34,9 +34,9 @@ TEST(EvaluateTrajectory, RigidlyMovedCopyHasZeroErrorAndNoiseIsMeasured) {
   std::mt19937 rng(5);
   std::normal_distribution<double> noise(0, 0.01);
   for (StampedPose& p : est)
-    p.world_from_camera = SE3(p.world_from_camera.rotation(),
-                              p.world_from_camera.translation() +
-                                  Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+    p.world_from_camera = SE3(
+        p.world_from_camera.rotation(),
+        p.world_from_camera.translation() + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
   s = EvaluateTrajectory(gt, est);
   EXPECT_NEAR(s.ate_rmse_m, 0.01 * std::sqrt(3.0), 0.002);
 }
