@@ -1,0 +1,199 @@
+#include "registration/icp.h"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+#include <cstdio>
+
+#include "acquisition/errors.h"
+
+namespace gf {
+namespace {
+
+double HuberWeight(double normalized_residual, double threshold) {
+  const double a = std::abs(normalized_residual);
+  return a <= threshold ? 1.0 : threshold / a;
+}
+
+}  // namespace
+
+bool IcpOptions::Check(std::string* message) const {
+  auto fail = [&](const char* m) {
+    if (message) *message = m;
+    return false;
+  };
+  if (iterations.empty()) return fail("iterations: need at least one level");
+  for (int i : iterations)
+    if (i < 0) return fail("iterations must be >= 0");
+  if (!(max_distance_m > 0) || !(max_normal_angle_deg > 0 && max_normal_angle_deg <= 180))
+    return fail("need max_distance_m > 0 and 0 < max_normal_angle_deg <= 180");
+  if (!(noise_a_m > 0) || !(noise_b_per_m >= 0))
+    return fail("need noise_a_m > 0 and noise_b_per_m >= 0");
+  if (!(plane_sigma_m > 0) || !(plane_huber > 0) || !(feature_sigma_px > 0) ||
+      !(feature_huber > 0) || !(feature_weight >= 0))
+    return fail("sigmas and Huber thresholds must be positive, feature_weight >= 0");
+  if (min_inliers < 0 || !(max_rmse_m > 0) || !(convergence_step > 0))
+    return fail("need min_inliers >= 0, max_rmse_m > 0, convergence_step > 0");
+  return true;
+}
+
+std::string IcpSummary::BriefReport() const {
+  char buffer[200];
+  std::snprintf(buffer, sizeof(buffer),
+                "ICP %s (%s): %d iterations, %d/%d inliers, rmse %.4f m, %d feature inliers",
+                success ? "ok" : "failed", termination.c_str(), iterations, inliers, valid_points,
+                rmse_m, feature_inliers);
+  return buffer;
+}
+
+double PointToPlaneResidual(const SE3& t, const Eigen::Vector3d& p, const Eigen::Vector3d& q,
+                            const Eigen::Vector3d& n, Eigen::Matrix<double, 1, 6>* jacobian) {
+  const Eigen::Vector3d x = t * p;
+  if (jacobian) {
+    jacobian->head<3>() = n.transpose();
+    jacobian->tail<3>() = x.cross(n).transpose();
+  }
+  return n.dot(x - q);
+}
+
+Eigen::Vector2d ReprojectionResidual(const SE3& t, const Camera& camera, const Eigen::Vector3d& p,
+                                     const Eigen::Vector2d& u,
+                                     Eigen::Matrix<double, 2, 6>* jacobian) {
+  const Eigen::Vector3d x = t * p;
+  const double iz = 1.0 / x.z();
+  if (jacobian) {
+    Eigen::Matrix<double, 2, 3> d_proj;
+    d_proj << camera.fx * iz, 0, -camera.fx * x.x() * iz * iz, 0, camera.fy * iz,
+        -camera.fy * x.y() * iz * iz;
+    Eigen::Matrix<double, 3, 6> d_point;
+    d_point.leftCols<3>() = Eigen::Matrix3d::Identity();
+    d_point.rightCols<3>() = -Hat(x);
+    *jacobian = d_proj * d_point;
+  }
+  return Eigen::Vector2d(camera.fx * x.x() * iz + camera.cx - u.x(),
+                         camera.fy * x.y() * iz + camera.cy - u.y());
+}
+
+IcpSummary AlignPointToPlane(const DepthPyramid& reference, const DepthPyramid& current,
+                             const SE3& initial, const IcpOptions& options,
+                             const std::vector<FeatureCorrespondence>& features) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+  GF_CHECK(reference.levels() >= static_cast<int>(options.iterations.size()) &&
+               current.levels() >= static_cast<int>(options.iterations.size()),
+           "pyramids have fewer levels than options.iterations");
+  IcpSummary summary;
+  SE3 t = initial;
+  const double cos_max_angle = std::cos(options.max_normal_angle_deg * M_PI / 180.0);
+  const double plane_scale = 1.0 / options.plane_sigma_m;
+  const double sigma_at_1m = options.noise_a_m + options.noise_b_per_m * 0.36;
+  const double feature_scale = 1.0 / options.feature_sigma_px;
+  const int n_levels = static_cast<int>(options.iterations.size());
+  bool converged_at_finest = false;
+
+  for (int li = 0; li < n_levels; ++li) {
+    const int level = n_levels - 1 - li;  // coarsest first
+    const Camera& cam = reference.cameras[level];
+    const cv::Mat& ref_v = reference.vertices[level];
+    const cv::Mat& ref_n = reference.normals[level];
+    const cv::Mat& cur_v = current.vertices[level];
+    const cv::Mat& cur_n = current.normals[level];
+    const bool finest = level == 0;
+    for (int it = 0; it <= options.iterations[li]; ++it) {
+      // The extra pass after the last step only measures (inliers, RMSE, information).
+      const bool measure_only = it == options.iterations[li];
+      Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+      Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+      int inliers = 0, valid = 0;
+      double sum2 = 0;
+      const Eigen::Matrix3f r = t.RotationMatrix().cast<float>();
+      const Eigen::Vector3f tr = t.translation().cast<float>();
+      for (int y = 0; y < cur_v.rows; ++y) {
+        const cv::Vec3f* vrow = cur_v.ptr<cv::Vec3f>(y);
+        const cv::Vec3f* nrow = cur_n.ptr<cv::Vec3f>(y);
+        for (int x = 0; x < cur_v.cols; ++x) {
+          const cv::Vec3f& pv = vrow[x];
+          const cv::Vec3f& pn = nrow[x];
+          if (std::isnan(pn[0])) continue;
+          ++valid;
+          const Eigen::Vector3f p = r * Eigen::Vector3f(pv[0], pv[1], pv[2]) + tr;
+          if (p.z() <= 0) continue;
+          const int u = static_cast<int>(std::lround(cam.fx * p.x() / p.z() + cam.cx));
+          const int v = static_cast<int>(std::lround(cam.fy * p.y() / p.z() + cam.cy));
+          if (u < 0 || v < 0 || u >= ref_v.cols || v >= ref_v.rows) continue;
+          const cv::Vec3f& qn = ref_n.at<cv::Vec3f>(v, u);
+          if (std::isnan(qn[0])) continue;
+          const cv::Vec3f& qv = ref_v.at<cv::Vec3f>(v, u);
+          const Eigen::Vector3f q(qv[0], qv[1], qv[2]);
+          const Eigen::Vector3f n(qn[0], qn[1], qn[2]);
+          if ((p - q).squaredNorm() > options.max_distance_m * options.max_distance_m) continue;
+          const Eigen::Vector3f n_cur = r * Eigen::Vector3f(pn[0], pn[1], pn[2]);
+          if (n.dot(n_cur) < cos_max_angle) continue;
+          const double residual = n.dot(p - q);
+          ++inliers;
+          sum2 += residual * residual;
+          double scale = plane_scale;
+          if (options.depth_weighting) {
+            const double dz = q.z() - 0.4;
+            scale *= sigma_at_1m / (options.noise_a_m + options.noise_b_per_m * dz * dz);
+          }
+          const double w = HuberWeight(residual * scale, options.plane_huber) * scale * scale;
+          Eigen::Matrix<double, 6, 1> j;
+          j.head<3>() = n.cast<double>();
+          j.tail<3>() = p.cast<double>().cross(n.cast<double>());
+          h.selfadjointView<Eigen::Upper>().rankUpdate(j, w);
+          g += w * residual * j;
+        }
+      }
+      int feature_inliers = 0;
+      if (options.feature_weight > 0) {
+        for (const FeatureCorrespondence& f : features) {
+          if ((t * f.point_in_current).z() <= 0) continue;
+          Eigen::Matrix<double, 2, 6> j;
+          // Features are observed at level 0: scale pixels to this level.
+          const double s = std::ldexp(1.0, -level);
+          const Eigen::Vector2d pixel = (f.pixel_in_reference.array() + 0.5) * s - 0.5;
+          const Eigen::Vector2d residual =
+              ReprojectionResidual(t, cam, f.point_in_current, pixel, &j);
+          const double norm = residual.norm() * feature_scale / s;
+          feature_inliers += norm <= options.feature_huber;
+          const double w = options.feature_weight * HuberWeight(norm, options.feature_huber) *
+                           feature_scale * feature_scale / (s * s);
+          h.selfadjointView<Eigen::Upper>().rankUpdate(j.transpose(), w);
+          g += w * j.transpose() * residual;
+        }
+      }
+      h = h.selfadjointView<Eigen::Upper>();
+      if (finest) {
+        summary.inliers = inliers;
+        summary.valid_points = valid;
+        summary.rmse_m = inliers ? std::sqrt(sum2 / inliers) : 0.0;
+        summary.feature_inliers = feature_inliers;
+        summary.information = h;
+      }
+      if (measure_only) break;
+      if (inliers < 6) break;  // nothing to solve with at this level
+      const Eigen::Matrix<double, 6, 1> xi = h.ldlt().solve(-g);
+      if (!xi.allFinite()) break;
+      t = SE3::Exp(xi) * t;
+      ++summary.iterations;
+      if (xi.head<3>().norm() < options.convergence_step &&
+          xi.tail<3>().norm() < options.convergence_step) {
+        if (finest) converged_at_finest = true;
+        // Measure at the converged pose before leaving the level.
+        it = options.iterations[li] - 1;
+      }
+    }
+  }
+  summary.reference_from_current = t;
+  if (summary.inliers < options.min_inliers) {
+    summary.termination = "too few inliers (" + std::to_string(summary.inliers) + ")";
+  } else if (summary.rmse_m > options.max_rmse_m) {
+    summary.termination = "residual too large";
+  } else {
+    summary.success = true;
+    summary.termination = converged_at_finest ? "converged" : "max iterations";
+  }
+  return summary;
+}
+
+}  // namespace gf
