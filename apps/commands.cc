@@ -8,6 +8,7 @@
 #include "apps/demo.h"
 #include "apps/info.h"
 #include "apps/progress.h"
+#include "apps/reconstruct.h"
 #include "datasets/synth.h"
 
 namespace gf {
@@ -71,6 +72,25 @@ void RegisterCommands(CLI::App& app) {
           synth::GenerateDataset(*options, *out, [&](int done, int) { progress.Update(done); });
       progress.Finish();
       std::cout << "synth: " << s.BriefReport() << "; written to " << *out << std::endl;
+    });
+  }
+  {
+    auto options = std::make_shared<ReconstructOptions>();
+    auto args = std::make_shared<InputArgs>();
+    auto range = std::make_shared<std::string>();
+    CLI::App* cmd = app.add_subcommand(
+        "reconstruct", "track the camera through INPUT; write DIR/trajectory.txt and report.json");
+    AddInputArgs(cmd, args.get());
+    cmd->add_option("--out", options->out_dir, "run folder")->required();
+    cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
+    cmd->callback([options, args, range] {
+      options->input = args->input;
+      options->source = args->ToOptions();
+      options->source.load_color = false;  // tracking uses depth only so far
+      if (!range->empty()) ParseFrameRange(*range, &options->first_frame, &options->end_frame);
+      const ReconstructSummary s = RunReconstruct(*options);
+      std::cout << "reconstruct: " << s.BriefReport() << "; outputs in " << options->out_dir
+                << std::endl;
     });
   }
   {

@@ -1,8 +1,10 @@
 #include "registration/icp.h"
 
 #include <Eigen/Cholesky>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <opencv2/core/utility.hpp>
 
 #include "acquisition/errors.h"
 
@@ -12,6 +14,79 @@ namespace {
 double HuberWeight(double normalized_residual, double threshold) {
   const double a = std::abs(normalized_residual);
   return a <= threshold ? 1.0 : threshold / a;
+}
+
+// Normal equations of the point-to-plane term over a band of rows.
+struct DenseAccumulator {
+  Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();  // upper triangle
+  Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+  int inliers = 0, valid = 0;
+  double sum2 = 0;
+  DenseAccumulator& operator+=(const DenseAccumulator& o) {
+    h += o.h;
+    g += o.g;
+    inliers += o.inliers;
+    valid += o.valid;
+    sum2 += o.sum2;
+    return *this;
+  }
+};
+
+struct DenseLevel {
+  const Camera& cam;
+  const cv::Mat& ref_v;
+  const cv::Mat& ref_n;
+  const cv::Mat& cur_v;
+  const cv::Mat& cur_n;
+  const SE3& t;
+  double cos_max_angle, plane_scale, sigma_at_1m;
+  const IcpOptions* options;
+};
+
+DenseAccumulator AccumulateDense(const DenseLevel& l, int row_begin, int row_end) {
+  const IcpOptions& options = *l.options;
+  DenseAccumulator a;
+  const Eigen::Matrix3f r = l.t.RotationMatrix().cast<float>();
+  const Eigen::Vector3f tr = l.t.translation().cast<float>();
+  const float max_d2 = static_cast<float>(options.max_distance_m * options.max_distance_m);
+  for (int y = row_begin; y < row_end; ++y) {
+    const cv::Vec3f* vrow = l.cur_v.ptr<cv::Vec3f>(y);
+    const cv::Vec3f* nrow = l.cur_n.ptr<cv::Vec3f>(y);
+    for (int x = 0; x < l.cur_v.cols; ++x) {
+      const cv::Vec3f& pv = vrow[x];
+      const cv::Vec3f& pn = nrow[x];
+      if (std::isnan(pn[0])) continue;
+      ++a.valid;
+      const Eigen::Vector3f p = r * Eigen::Vector3f(pv[0], pv[1], pv[2]) + tr;
+      if (p.z() <= 0) continue;
+      const int u = static_cast<int>(std::lround(l.cam.fx * p.x() / p.z() + l.cam.cx));
+      const int v = static_cast<int>(std::lround(l.cam.fy * p.y() / p.z() + l.cam.cy));
+      if (u < 0 || v < 0 || u >= l.ref_v.cols || v >= l.ref_v.rows) continue;
+      const cv::Vec3f& qn = l.ref_n.at<cv::Vec3f>(v, u);
+      if (std::isnan(qn[0])) continue;
+      const cv::Vec3f& qv = l.ref_v.at<cv::Vec3f>(v, u);
+      const Eigen::Vector3f q(qv[0], qv[1], qv[2]);
+      const Eigen::Vector3f n(qn[0], qn[1], qn[2]);
+      if ((p - q).squaredNorm() > max_d2) continue;
+      const Eigen::Vector3f n_cur = r * Eigen::Vector3f(pn[0], pn[1], pn[2]);
+      if (n.dot(n_cur) < l.cos_max_angle) continue;
+      const double residual = n.dot(p - q);
+      ++a.inliers;
+      a.sum2 += residual * residual;
+      double scale = l.plane_scale;
+      if (options.depth_weighting) {
+        const double dz = q.z() - 0.4;
+        scale *= l.sigma_at_1m / (options.noise_a_m + options.noise_b_per_m * dz * dz);
+      }
+      const double w = HuberWeight(residual * scale, options.plane_huber) * scale * scale;
+      Eigen::Matrix<double, 6, 1> j;
+      j.head<3>() = n.cast<double>();
+      j.tail<3>() = p.cast<double>().cross(n.cast<double>());
+      a.h.selfadjointView<Eigen::Upper>().rankUpdate(j, w);
+      a.g += w * residual * j;
+    }
+  }
+  return a;
 }
 
 }  // namespace
@@ -101,49 +176,23 @@ IcpSummary AlignPointToPlane(const DepthPyramid& reference, const DepthPyramid& 
     for (int it = 0; it <= options.iterations[li]; ++it) {
       // The extra pass after the last step only measures (inliers, RMSE, information).
       const bool measure_only = it == options.iterations[li];
-      Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
-      Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
-      int inliers = 0, valid = 0;
-      double sum2 = 0;
-      const Eigen::Matrix3f r = t.RotationMatrix().cast<float>();
-      const Eigen::Vector3f tr = t.translation().cast<float>();
-      for (int y = 0; y < cur_v.rows; ++y) {
-        const cv::Vec3f* vrow = cur_v.ptr<cv::Vec3f>(y);
-        const cv::Vec3f* nrow = cur_n.ptr<cv::Vec3f>(y);
-        for (int x = 0; x < cur_v.cols; ++x) {
-          const cv::Vec3f& pv = vrow[x];
-          const cv::Vec3f& pn = nrow[x];
-          if (std::isnan(pn[0])) continue;
-          ++valid;
-          const Eigen::Vector3f p = r * Eigen::Vector3f(pv[0], pv[1], pv[2]) + tr;
-          if (p.z() <= 0) continue;
-          const int u = static_cast<int>(std::lround(cam.fx * p.x() / p.z() + cam.cx));
-          const int v = static_cast<int>(std::lround(cam.fy * p.y() / p.z() + cam.cy));
-          if (u < 0 || v < 0 || u >= ref_v.cols || v >= ref_v.rows) continue;
-          const cv::Vec3f& qn = ref_n.at<cv::Vec3f>(v, u);
-          if (std::isnan(qn[0])) continue;
-          const cv::Vec3f& qv = ref_v.at<cv::Vec3f>(v, u);
-          const Eigen::Vector3f q(qv[0], qv[1], qv[2]);
-          const Eigen::Vector3f n(qn[0], qn[1], qn[2]);
-          if ((p - q).squaredNorm() > options.max_distance_m * options.max_distance_m) continue;
-          const Eigen::Vector3f n_cur = r * Eigen::Vector3f(pn[0], pn[1], pn[2]);
-          if (n.dot(n_cur) < cos_max_angle) continue;
-          const double residual = n.dot(p - q);
-          ++inliers;
-          sum2 += residual * residual;
-          double scale = plane_scale;
-          if (options.depth_weighting) {
-            const double dz = q.z() - 0.4;
-            scale *= sigma_at_1m / (options.noise_a_m + options.noise_b_per_m * dz * dz);
-          }
-          const double w = HuberWeight(residual * scale, options.plane_huber) * scale * scale;
-          Eigen::Matrix<double, 6, 1> j;
-          j.head<3>() = n.cast<double>();
-          j.tail<3>() = p.cast<double>().cross(n.cast<double>());
-          h.selfadjointView<Eigen::Upper>().rankUpdate(j, w);
-          g += w * residual * j;
-        }
-      }
+      // Dense term: fixed horizontal stripes accumulated in parallel, summed in stripe order, so
+      // the result does not depend on thread scheduling.
+      constexpr int kStripes = 16;
+      std::array<DenseAccumulator, kStripes> parts;
+      const DenseLevel level_data{cam, ref_v,         ref_n,       cur_v,       cur_n,
+                                  t,   cos_max_angle, plane_scale, sigma_at_1m, &options};
+      cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
+        for (int stripe = range.start; stripe < range.end; ++stripe)
+          parts[stripe] = AccumulateDense(level_data, cur_v.rows * stripe / kStripes,
+                                          cur_v.rows * (stripe + 1) / kStripes);
+      });
+      DenseAccumulator dense;
+      for (const DenseAccumulator& part : parts) dense += part;
+      Eigen::Matrix<double, 6, 6> h = dense.h;
+      Eigen::Matrix<double, 6, 1> g = dense.g;
+      const int inliers = dense.inliers, valid = dense.valid;
+      const double sum2 = dense.sum2;
       int feature_inliers = 0;
       if (options.feature_weight > 0) {
         for (const FeatureCorrespondence& f : features) {

@@ -1,0 +1,179 @@
+#include "apps/reconstruct.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "acquisition/errors.h"
+#include "acquisition/file_util.h"
+#include "acquisition/trajectory.h"
+#include "apps/bounded_queue.h"
+#include "apps/progress.h"
+
+namespace fs = std::filesystem;
+
+namespace gf {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+nlohmann::ordered_json StageStats(std::vector<double> ms) {
+  if (ms.empty()) return {{"median_ms", nullptr}, {"max_ms", nullptr}, {"count", 0}};
+  std::sort(ms.begin(), ms.end());
+  return {{"median_ms", ms[ms.size() / 2]}, {"max_ms", ms.back()}, {"count", ms.size()}};
+}
+
+// A frame that failed to read travels down the queue as an error, so it reaches the main thread.
+struct Item {
+  RgbdFrame frame;
+  double read_ms = 0;
+  std::exception_ptr error;
+};
+
+}  // namespace
+
+bool ReconstructOptions::Check(std::string* message) const {
+  if (input.empty() || out_dir.empty()) {
+    if (message) *message = "need INPUT and --out";
+    return false;
+  }
+  if (first_frame < 0 || (end_frame >= 0 && end_frame <= first_frame) || queue_capacity < 1) {
+    if (message) *message = "need 0 <= A < B in --frames A:B";
+    return false;
+  }
+  return source.Check(message) && tracker.Check(message);
+}
+
+std::string ReconstructSummary::BriefReport() const {
+  char buffer[200];
+  std::snprintf(buffer, sizeof(buffer), "%d frames in %.1f s (%.1f fps), %d keyframes, %d lost",
+                frames, seconds, fps, keyframes, lost);
+  return buffer;
+}
+
+void ParseFrameRange(const std::string& range, int* first, int* end) {
+  const size_t colon = range.find(':');
+  if (colon == std::string::npos) throw InputError("--frames", "expected A:B, A: or :B");
+  try {
+    const std::string a = range.substr(0, colon), b = range.substr(colon + 1);
+    *first = a.empty() ? 0 : std::stoi(a);
+    *end = b.empty() ? -1 : std::stoi(b);
+  } catch (const std::exception&) {
+    throw InputError("--frames", "\"" + range + "\" is not A:B with frame numbers");
+  }
+  if (*first < 0 || (*end >= 0 && *end <= *first))
+    throw InputError("--frames", "\"" + range + "\" needs 0 <= A < B");
+}
+
+ReconstructSummary RunReconstruct(const ReconstructOptions& options) {
+  std::string problem;
+  if (!options.Check(&problem)) throw InputError(options.out_dir, "bad options: " + problem);
+  std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, options.source);
+  std::error_code ec;
+  fs::create_directories(options.out_dir, ec);
+  if (ec) throw InputError(options.out_dir, "cannot create output folder: " + ec.message());
+
+  std::optional<int> total = source->FrameCount();
+  if (total) {
+    int last = options.end_frame >= 0 ? std::min(*total, options.end_frame) : *total;
+    total = std::max(0, last - options.first_frame);
+  }
+
+  // Reader stage: decodes frames into the queue.
+  BoundedQueue<Item> queue(options.queue_capacity);
+  std::thread reader([&] {
+    int index = 0;
+    while (true) {
+      Item item;
+      const auto t0 = Clock::now();
+      try {
+        if (options.end_frame >= 0 && index >= options.end_frame) break;
+        if (!source->Next(&item.frame)) break;
+      } catch (...) {
+        item.error = std::current_exception();
+        queue.Push(std::move(item));
+        break;
+      }
+      item.read_ms = Ms(t0, Clock::now());
+      if (index++ < options.first_frame) continue;
+      if (!queue.Push(std::move(item))) break;
+    }
+    queue.Close();
+  });
+
+  FrameToKeyframeTracker tracker(source->camera(), options.tracker);
+  Trajectory trajectory;
+  std::vector<double> read_ms, track_ms;
+  ReconstructSummary summary;
+  TerminalProgress progress("reconstruct", total);
+  const auto start = Clock::now();
+  Item item;
+  try {
+    while (queue.Pop(&item)) {
+      if (item.error) std::rethrow_exception(item.error);
+      const auto t0 = Clock::now();
+      const TrackingResult r = tracker.Track(item.frame);
+      track_ms.push_back(Ms(t0, Clock::now()));
+      read_ms.push_back(item.read_ms);
+      if (r.status == TrackingStatus::kLost) {
+        ++summary.lost;
+        spdlog::debug("frame {} ({}): tracking lost: {}", item.frame.index,
+                      item.frame.timestamp_text, r.BriefReport());
+      }
+      trajectory.push_back({item.frame.timestamp, item.frame.timestamp_text, r.world_from_camera});
+      ++summary.frames;
+      progress.Update(summary.frames);
+    }
+  } catch (...) {
+    queue.Close();
+    reader.join();
+    throw;
+  }
+  reader.join();
+  progress.Finish();
+  summary.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  summary.fps = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
+  summary.keyframes = tracker.keyframes();
+  if (trajectory.empty()) throw InputError(options.input, "no frames in the selected range");
+
+  WriteTumTrajectory((fs::path(options.out_dir) / "trajectory.txt").string(), trajectory);
+  nlohmann::ordered_json report;
+  report["input"] = {{"path", options.input},
+                     {"kind", source->Kind()},
+                     {"first_frame", options.first_frame},
+                     {"end_frame", options.end_frame}};
+  const TrackerOptions& t = options.tracker;
+  report["config"] = {{"tracker", "frame_to_keyframe_icp"},
+                      {"pyramid_levels", t.pyramid_levels},
+                      {"icp_iterations", t.icp.iterations},
+                      {"icp_max_distance_m", t.icp.max_distance_m},
+                      {"icp_max_normal_angle_deg", t.icp.max_normal_angle_deg},
+                      {"keyframe_max_rotation_deg", t.keyframes.max_rotation_deg},
+                      {"keyframe_max_translation_m", t.keyframes.max_translation_m},
+                      {"keyframe_min_overlap", t.keyframes.min_overlap},
+                      {"threads", "reader + tracker"},
+                      {"hardware_concurrency", std::thread::hardware_concurrency()}};
+  report["frames"] = summary.frames;
+  report["fps"] = summary.fps;
+  report["stages"] = {{"read", StageStats(read_ms)}, {"track", StageStats(track_ms)}};
+  report["keyframes"] = summary.keyframes;
+  report["tracking"] = {{"lost_frames", summary.lost}};
+  report["loops"] = nullptr;    // loop closure: not built yet
+  report["fill"] = nullptr;     // stereo fill: not built yet
+  report["surfels"] = nullptr;  // surfel fusion: not built yet
+  WriteTextFileAtomically((fs::path(options.out_dir) / "report.json").string(),
+                          report.dump(2) + "\n");
+  return summary;
+}
+
+}  // namespace gf

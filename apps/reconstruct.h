@@ -1,0 +1,44 @@
+// `glassfusion reconstruct INPUT --out DIR`: the pipeline controller.
+//
+// Stages run in threads joined by bounded queues (DESIGN.md): a reader decodes frames while the
+// tracker aligns the previous ones. Today the pipeline tracks the camera (frame-to-keyframe ICP);
+// stereo fill, loop closure and surfel fusion join it as they land.
+//
+// Outputs in DIR: trajectory.txt (TUM format, the input's depth timestamps) and report.json
+// (input, config, frames, fps, per-stage median/max milliseconds, keyframes, tracking losses;
+// loops/fill/surfels are null until those stages exist). Each file is written atomically.
+#pragma once
+
+#include <string>
+
+#include "acquisition/frame_source.h"
+#include "registration/tracker.h"
+
+namespace gf {
+
+struct ReconstructOptions {
+  std::string input;
+  std::string out_dir;
+  int first_frame = 0;  // --frames A:B: skip frames before A
+  int end_frame = -1;   // ... and stop before B (-1 = to the end)
+  FrameSourceOptions source;
+  TrackerOptions tracker;
+  int queue_capacity = 8;  // frames buffered between reader and tracker
+  bool Check(std::string* message = nullptr) const;
+};
+
+struct ReconstructSummary {
+  int frames = 0;
+  int lost = 0;
+  int keyframes = 0;
+  double seconds = 0;
+  double fps = 0;
+  std::string BriefReport() const;
+};
+
+// Parses "A:B", "A:" or ":B" into first/end frame. Throws InputError on anything else.
+void ParseFrameRange(const std::string& range, int* first, int* end);
+
+ReconstructSummary RunReconstruct(const ReconstructOptions& options);
+
+}  // namespace gf

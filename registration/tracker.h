@@ -1,0 +1,79 @@
+// Camera tracking: one interface, so frame-to-model tracking against the surfel map can replace
+// the frame-to-keyframe tracker when the map lands.
+//
+// FrameToKeyframeTracker aligns each frame to the current keyframe with AlignPointToPlane, starting
+// from a constant-velocity prediction. A frame becomes the new keyframe when it has moved more than
+// the policy allows from the keyframe or shares too little of it. Tracking loss (ICP failure, too
+// little overlap, an implausible jump) is reported in the result; the pose then stays at the last
+// good one and the frame starts a new keyframe, so the run goes on.
+//
+// No threads, no I/O. Usage:
+//   gf::FrameToKeyframeTracker tracker(camera, gf::TrackerOptions{});
+//   for (each frame) { gf::TrackingResult r = tracker.Track(frame); trajectory.push_back(...); }
+#pragma once
+
+#include <string>
+
+#include "acquisition/camera.h"
+#include "acquisition/rgbd_frame.h"
+#include "acquisition/se3.h"
+#include "registration/depth_pyramid.h"
+#include "registration/icp.h"
+
+namespace gf {
+
+struct KeyframePolicy {
+  double max_rotation_deg = 5.0;    // new keyframe beyond this rotation from the keyframe
+  double max_translation_m = 0.02;  // ... or this translation, metres
+  double min_overlap = 0.3;         // ... or when fewer of the frame's points pair with it
+  bool Check(std::string* message = nullptr) const;
+};
+
+struct TrackerOptions {
+  int pyramid_levels = 3;  // must cover icp.iterations
+  IcpOptions icp;
+  KeyframePolicy keyframes;
+  bool constant_velocity = true;  // predict with the last inter-frame motion
+  double max_jump_m = 0.15;       // larger correction of the prediction: treated as lost
+  double max_jump_deg = 15.0;
+  bool Check(std::string* message = nullptr) const;
+};
+
+enum class TrackingStatus { kInitialized, kTracking, kLost };
+const char* TrackingStatusName(TrackingStatus status);
+
+struct TrackingResult {
+  TrackingStatus status = TrackingStatus::kInitialized;
+  SE3 world_from_camera;
+  bool new_keyframe = false;
+  double overlap = 0;  // inliers / valid points against the keyframe
+  IcpSummary icp;
+  std::string BriefReport() const;
+};
+
+class Tracker {
+ public:
+  virtual ~Tracker() = default;
+  // frame.depth must match the tracker's camera.
+  virtual TrackingResult Track(const RgbdFrame& frame) = 0;
+};
+
+class FrameToKeyframeTracker : public Tracker {
+ public:
+  // Throws std::logic_error when options.Check() fails (a programming error at this level).
+  FrameToKeyframeTracker(const Camera& camera, const TrackerOptions& options);
+  TrackingResult Track(const RgbdFrame& frame) override;
+  int keyframes() const { return keyframes_; }
+
+ private:
+  Camera camera_;
+  TrackerOptions options_;
+  bool initialized_ = false;
+  DepthPyramid keyframe_;
+  SE3 world_from_keyframe_;
+  SE3 world_from_previous_;
+  SE3 velocity_;  // previous_from_current of the last step
+  int keyframes_ = 0;
+};
+
+}  // namespace gf
