@@ -4,6 +4,7 @@
 
 #include "acquisition/errors.h"
 #include "acquisition/trajectory_metrics.h"
+#include "apps/bench.h"
 #include "apps/capture.h"
 #include "apps/demo.h"
 #include "apps/info.h"
@@ -91,6 +92,37 @@ void RegisterCommands(CLI::App& app) {
       const ReconstructSummary s = RunReconstruct(*options);
       std::cout << "reconstruct: " << s.BriefReport() << "; outputs in " << options->out_dir
                 << std::endl;
+    });
+  }
+  {
+    auto options = std::make_shared<BenchOptions>();
+    auto args = std::make_shared<InputArgs>();
+    auto range = std::make_shared<std::string>();
+    auto no_peers = std::make_shared<bool>(false);
+    CLI::App* cmd = app.add_subcommand(
+        "bench", "time GlassFusion's tracker and OpenCV's odometry peers on the same frames");
+    AddInputArgs(cmd, args.get());
+    cmd->add_option("--frames", *range, "frame range A:B");
+    cmd->add_option("--gt", options->gt, "ground truth (default: INPUT/groundtruth.txt or .log)");
+    cmd->add_flag("--no-peers", *no_peers, "time GlassFusion only");
+    cmd->callback([options, args, range, no_peers] {
+      options->input = args->input;
+      options->source = args->ToOptions();
+      options->peers = !*no_peers;
+      if (!range->empty()) ParseFrameRange(*range, &options->first_frame, &options->end_frame);
+      const auto j = RunBench(*options);
+      std::printf("%-36s %8s %8s %10s %8s\n", "method", "ms", "fps", "ATE (cm)", "failed");
+      for (const auto& m : j["methods"]) {
+        const bool has_ate = m.contains("ate_rmse_m") && !m["ate_rmse_m"].is_null();
+        std::printf("%-36s %8.1f %8.1f %10s %8d\n", m["method"].get<std::string>().c_str(),
+                    m["median_ms"].get<double>(), m["fps"].get<double>(),
+                    has_ate
+                        ? std::to_string(100.0 * m["ate_rmse_m"].get<double>()).substr(0, 6).c_str()
+                        : "-",
+                    m["failed_frames"].get<int>());
+      }
+      std::printf("%d frames, %u cores\n", j["frames"].get<int>(), j["cores"].get<unsigned>());
+      std::cout << j.dump(2) << std::endl;
     });
   }
   {

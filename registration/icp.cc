@@ -20,12 +20,13 @@ double HuberWeight(double normalized_residual, double threshold) {
 struct DenseAccumulator {
   Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();  // upper triangle
   Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
-  int inliers = 0, valid = 0;
+  int inliers = 0, valid = 0, overlapping = 0;
   double sum2 = 0;
   DenseAccumulator& operator+=(const DenseAccumulator& o) {
     h += o.h;
     g += o.g;
     inliers += o.inliers;
+    overlapping += o.overlapping;
     valid += o.valid;
     sum2 += o.sum2;
     return *this;
@@ -64,6 +65,7 @@ DenseAccumulator AccumulateDense(const DenseLevel& l, int row_begin, int row_end
       if (u < 0 || v < 0 || u >= l.ref_v.cols || v >= l.ref_v.rows) continue;
       const cv::Vec3f& qn = l.ref_n.at<cv::Vec3f>(v, u);
       if (std::isnan(qn[0])) continue;
+      ++a.overlapping;
       const cv::Vec3f& qv = l.ref_v.at<cv::Vec3f>(v, u);
       const Eigen::Vector3f q(qv[0], qv[1], qv[2]);
       const Eigen::Vector3f n(qn[0], qn[1], qn[2]);
@@ -215,6 +217,7 @@ IcpSummary AlignPointToPlane(const DepthPyramid& reference, const DepthPyramid& 
       if (finest) {
         summary.inliers = inliers;
         summary.valid_points = valid;
+        summary.overlapping_points = dense.overlapping;
         summary.rmse_m = inliers ? std::sqrt(sum2 / inliers) : 0.0;
         summary.feature_inliers = feature_inliers;
         summary.information = h;

@@ -56,11 +56,12 @@ struct IcpSummary {
   bool success = false;
   std::string termination;  // "converged", "max iterations", or why it failed
   SE3 reference_from_current;
-  int iterations = 0;       // over all levels
-  int inliers = 0;          // point pairs at the finest level
-  int valid_points = 0;     // current pixels with a vertex and normal at the finest level
-  double rmse_m = 0;        // point-to-plane RMSE of the inliers at the finest level
-  int feature_inliers = 0;  // features within the Huber threshold at the end
+  int iterations = 0;          // over all levels
+  int inliers = 0;             // point pairs at the finest level
+  int valid_points = 0;        // current pixels with a vertex and normal at the finest level
+  int overlapping_points = 0;  // of those, landing on a reference pixel with a vertex and normal
+  double rmse_m = 0;           // point-to-plane RMSE of the inliers at the finest level
+  int feature_inliers = 0;     // features within the Huber threshold at the end
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();  // J^T W J
   std::string BriefReport() const;
 };

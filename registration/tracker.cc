@@ -70,9 +70,9 @@ TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& frame) {
   const SE3 predicted = world_from_previous_ * (options_.constant_velocity ? velocity_ : SE3());
   const SE3 keyframe_from_predicted = world_from_keyframe_.Inverse() * predicted;
   result.icp = AlignPointToPlane(keyframe_, current, keyframe_from_predicted, options_.icp);
-  result.overlap = result.icp.valid_points
-                       ? static_cast<double>(result.icp.inliers) / result.icp.valid_points
-                       : 0.0;
+  result.overlap = result.icp.valid_points ? static_cast<double>(result.icp.overlapping_points) /
+                                                 result.icp.valid_points
+                                           : 0.0;
   const SE3 correction = keyframe_from_predicted.Inverse() * result.icp.reference_from_current;
   const bool jumped = correction.TranslationNorm() > options_.max_jump_m ||
                       correction.RotationAngle() * 180.0 / M_PI > options_.max_jump_deg;

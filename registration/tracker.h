@@ -25,7 +25,7 @@ namespace gf {
 struct KeyframePolicy {
   double max_rotation_deg = 5.0;    // new keyframe beyond this rotation from the keyframe
   double max_translation_m = 0.02;  // ... or this translation, metres
-  double min_overlap = 0.3;         // ... or when fewer of the frame's points pair with it
+  double min_overlap = 0.7;         // ... or when fewer of the frame's points land on it
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -46,7 +46,7 @@ struct TrackingResult {
   TrackingStatus status = TrackingStatus::kInitialized;
   SE3 world_from_camera;
   bool new_keyframe = false;
-  double overlap = 0;  // inliers / valid points against the keyframe
+  double overlap = 0;  // share of the frame's points that land on the keyframe's surface
   IcpSummary icp;
   std::string BriefReport() const;
 };

@@ -1,0 +1,32 @@
+// `glassfusion bench INPUT`: GlassFusion's tracker and OpenCV's RGB-D odometry peers on the same
+// frames in one run: per-frame time, frames per second (with the machine's core count) and, when
+// ground truth sits beside the input (groundtruth.txt / groundtruth.log) or is given, ATE.
+//
+// Frames are decoded into memory first, so only tracking is timed. The OpenCV peers (RgbdOdometry,
+// ICPOdometry, RgbdICPOdometry, FastICPOdometry from opencv_contrib's rgbd module, Debian's build)
+// run frame-to-frame with their default parameters and our camera matrix, chaining
+// world_from_current = world_from_previous * Rt^-1 (OpenCV's Rt maps source points to the
+// destination frame). A peer that fails on a frame keeps its previous pose there, as ours does.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "acquisition/frame_source.h"
+
+namespace gf {
+
+struct BenchOptions {
+  std::string input;
+  std::string gt;  // ground truth; "" = INPUT/groundtruth.txt or .log when present
+  int first_frame = 0;
+  int end_frame = -1;
+  bool peers = true;  // also run the OpenCV odometry peers
+  FrameSourceOptions source;
+  bool Check(std::string* message = nullptr) const;
+};
+
+// Returns the JSON printed by the command: one entry per method.
+nlohmann::ordered_json RunBench(const BenchOptions& options);
+
+}  // namespace gf
