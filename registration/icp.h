@@ -26,7 +26,7 @@
 namespace gf {
 
 struct IcpOptions {
-  std::vector<int> iterations = {10, 6, 4};  // Gauss-Newton steps per level, coarsest first
+  std::vector<int> iterations = {10, 6, 2};  // Gauss-Newton steps per level, coarsest first
   double max_distance_m = 0.08;              // reject pairs farther apart, metres
   double max_normal_angle_deg = 30.0;        // reject pairs whose normals differ more, degrees
   double plane_sigma_m = 0.01;               // point-to-plane residual scale at 1 m, metres
