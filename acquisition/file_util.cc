@@ -61,6 +61,28 @@ void WriteTextFileAtomically(const std::string& path, const std::string& content
   });
 }
 
+std::string StageFolder(const std::string& out_dir) {
+  std::error_code ec;
+  if (fs::exists(out_dir, ec) && !(fs::is_directory(out_dir, ec) && fs::is_empty(out_dir, ec)))
+    throw InputError(out_dir, "already exists and is not empty; choose a new output folder");
+  // Beside the final folder, so the rename stays on one file system.
+  fs::path out = fs::absolute(out_dir).lexically_normal();
+  if (out.filename().empty()) out = out.parent_path();
+  const std::string staging = out.string() + ".partial-" + std::to_string(::getpid());
+  fs::remove_all(staging, ec);
+  fs::create_directories(staging, ec);
+  if (ec) throw InputError(out_dir, "cannot create output folder: " + ec.message());
+  return staging;
+}
+
+void PublishFolder(const std::string& staging_dir, const std::string& out_dir) {
+  std::error_code ec;
+  if (fs::exists(out_dir, ec))
+    fs::remove(out_dir, ec);  // only ever the empty folder StageFolder allowed
+  fs::rename(staging_dir, out_dir, ec);
+  if (ec) throw InputError(out_dir, "cannot move the finished output into place: " + ec.message());
+}
+
 bool IsRegularFile(const std::string& path) {
   std::error_code ec;
   return fs::is_regular_file(path, ec);

@@ -19,6 +19,12 @@ void WriteFileAtomically(const std::string& path,
                          const std::function<void(const std::string& temporary_path)>& write);
 void WriteTextFileAtomically(const std::string& path, const std::string& content);
 
+// Output folders that appear only when complete: StageFolder checks that out_dir does not exist or
+// is an empty folder (InputError otherwise) and returns a fresh, empty "<out_dir>.partial-<pid>"
+// beside it; PublishFolder renames the finished staging folder to out_dir.
+std::string StageFolder(const std::string& out_dir);
+void PublishFolder(const std::string& staging_dir, const std::string& out_dir);
+
 bool IsRegularFile(const std::string& path);
 bool IsDirectory(const std::string& path);
 

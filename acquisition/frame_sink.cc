@@ -27,14 +27,8 @@ TumFolderSink::TumFolderSink(std::string out_dir, CameraFile camera, TumFolderSi
     : out_dir_(std::move(out_dir)), camera_(std::move(camera)), options_(options) {
   std::string problem;
   if (!options_.Check(&problem)) throw InputError(out_dir_, "bad writer options: " + problem);
+  partial_dir_ = StageFolder(out_dir_);
   std::error_code ec;
-  if (fs::exists(out_dir_, ec) && !(fs::is_directory(out_dir_, ec) && fs::is_empty(out_dir_, ec)))
-    throw InputError(out_dir_, "already exists and is not empty; choose a new output folder");
-  // Keep the partial folder beside the final one so the rename stays on one file system.
-  fs::path out = fs::absolute(out_dir_).lexically_normal();
-  if (out.filename().empty()) out = out.parent_path();
-  partial_dir_ = out.string() + ".partial-" + std::to_string(::getpid());
-  fs::remove_all(partial_dir_, ec);
   fs::create_directories(fs::path(partial_dir_) / "rgb", ec);
   if (!ec) fs::create_directories(fs::path(partial_dir_) / "depth", ec);
   if (ec) throw InputError(out_dir_, "cannot create output folder: " + ec.message());
@@ -88,11 +82,7 @@ void TumFolderSink::Close() {
   written.depth_registered_to_color = true;  // frames arrive registered to colour
   written.depth_camera.reset();
   SaveCameraFile((fs::path(partial_dir_) / "camera.json").string(), written);
-  std::error_code ec;
-  if (fs::exists(out_dir_, ec)) fs::remove(out_dir_, ec);  // the empty folder checked above
-  fs::rename(partial_dir_, out_dir_, ec);
-  if (ec)
-    throw InputError(out_dir_, "cannot move the finished capture into place: " + ec.message());
+  PublishFolder(partial_dir_, out_dir_);
   closed_ = true;
 }
 

@@ -59,6 +59,25 @@ std::vector<IndexLine> ReadTumIndex(const std::string& folder, const std::string
   return lines;
 }
 
+// Depth and colour index lines paired one-to-one by time (AssociateTimestamps).
+std::vector<FolderFrameEntry> PairByTime(const std::vector<IndexLine>& depth,
+                                         const std::vector<IndexLine>& color, double max_dt) {
+  std::vector<double> td, tc;
+  for (const auto& d : depth) td.push_back(d.timestamp);
+  for (const auto& c : color) tc.push_back(c.timestamp);
+  std::vector<FolderFrameEntry> entries;
+  for (const auto& [i, j] : AssociateTimestamps(td, tc, max_dt)) {
+    FolderFrameEntry e;
+    e.timestamp = depth[i].timestamp;
+    e.timestamp_text = depth[i].timestamp_text;
+    e.color_timestamp = color[j].timestamp;
+    e.depth_path = depth[i].path;
+    e.color_path = color[j].path;
+    entries.push_back(e);
+  }
+  return entries;
+}
+
 CameraFile LoadFolderCamera(const std::string& folder, const FrameSourceOptions& options) {
   const std::string path = options.camera_file.empty() ? (fs::path(folder) / "camera.json").string()
                                                        : options.camera_file;
@@ -200,20 +219,9 @@ std::unique_ptr<FolderFrameSource> OpenTumFolder(const std::string& folder,
   const std::vector<IndexLine> depth = ReadTumIndex(folder, "depth.txt");
   const std::vector<IndexLine> color = ReadTumIndex(folder, "rgb.txt");
   const CameraFile camera = LoadFolderCamera(folder, options);
-  std::vector<double> td, tc;
-  for (const auto& d : depth) td.push_back(d.timestamp);
-  for (const auto& c : color) tc.push_back(c.timestamp);
-  const auto pairs = AssociateTimestamps(td, tc, options.max_association_dt_s);
-  std::vector<FolderFrameEntry> entries;
-  for (const auto& [i, j] : pairs) {
-    FolderFrameEntry e;
-    e.timestamp = depth[i].timestamp;
-    e.timestamp_text = depth[i].timestamp_text;
-    e.color_timestamp = color[j].timestamp;
-    e.depth_path = depth[i].path;
-    e.color_path = color[j].path;
-    entries.push_back(e);
-  }
+  const std::vector<FolderFrameEntry> entries =
+      PairByTime(depth, color, options.max_association_dt_s);
+  const size_t pairs = entries.size();
   if (entries.empty())
     throw InputError((fs::path(folder) / "depth.txt").string(),
                      "no depth frame has a colour frame within " +
@@ -223,8 +231,8 @@ std::unique_ptr<FolderFrameSource> OpenTumFolder(const std::string& folder,
       std::move(entries), options);
   source->listed_depth = static_cast<int>(depth.size());
   source->listed_color = static_cast<int>(color.size());
-  source->unmatched_depth = static_cast<int>(depth.size() - pairs.size());
-  source->unmatched_color = static_cast<int>(color.size() - pairs.size());
+  source->unmatched_depth = static_cast<int>(depth.size() - pairs);
+  source->unmatched_color = static_cast<int>(color.size() - pairs);
   if (source->unmatched_depth || source->unmatched_color)
     spdlog::info("{}: dropped {} depth and {} colour frames without a partner within {} ms", folder,
                  source->unmatched_depth, source->unmatched_color,
@@ -358,18 +366,7 @@ std::unique_ptr<FolderFrameSource> OpenKinectRawFolder(const std::string& folder
     auto by_time = [](const IndexLine& a, const IndexLine& b) { return a.timestamp < b.timestamp; };
     std::stable_sort(depth.begin(), depth.end(), by_time);
     std::stable_sort(color.begin(), color.end(), by_time);
-    std::vector<double> td, tc;
-    for (const auto& d : depth) td.push_back(d.timestamp);
-    for (const auto& c : color) tc.push_back(c.timestamp);
-    for (const auto& [i, j] : AssociateTimestamps(td, tc, options.max_association_dt_s)) {
-      FolderFrameEntry e;
-      e.timestamp = depth[i].timestamp;
-      e.timestamp_text = depth[i].timestamp_text;
-      e.color_timestamp = color[j].timestamp;
-      e.depth_path = depth[i].path;
-      e.color_path = color[j].path;
-      entries.push_back(e);
-    }
+    entries = PairByTime(depth, color, options.max_association_dt_s);
     listed_depth = static_cast<int>(depth.size());
     listed_color = static_cast<int>(color.size());
     if (entries.empty())

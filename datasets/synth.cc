@@ -239,13 +239,8 @@ SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out
                              const std::function<void(int, int)>& progress) {
   std::string problem;
   if (!options.Check(&problem)) throw InputError(out_dir, "bad synth options: " + problem);
+  const fs::path stage = StageFolder(out_dir);
   std::error_code ec;
-  if (fs::exists(out_dir, ec) && !(fs::is_directory(out_dir, ec) && fs::is_empty(out_dir, ec)))
-    throw InputError(out_dir, "already exists and is not empty; choose a new output folder");
-  fs::path final_path = fs::absolute(out_dir).lexically_normal();
-  if (final_path.filename().empty()) final_path = final_path.parent_path();
-  const fs::path stage = final_path.string() + ".partial-" + std::to_string(::getpid());
-  fs::remove_all(stage, ec);
   for (const char* sub : {"raw", "gt/depth", "gt/visible_depth", "gt/label", "gt/holes"}) {
     fs::create_directories(stage / sub, ec);
     if (ec) throw InputError(out_dir, "cannot create output folder: " + ec.message());
@@ -335,10 +330,7 @@ SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out
   j["seconds_per_frame"] = summary.seconds_per_frame;
   WriteTextFileAtomically((stage / "synth.json").string(), j.dump(2) + "\n");
 
-  if (fs::exists(final_path, ec)) fs::remove(final_path, ec);  // the empty folder checked above
-  fs::rename(stage, final_path, ec);
-  if (ec)
-    throw InputError(out_dir, "cannot move the generated dataset into place: " + ec.message());
+  PublishFolder(stage.string(), out_dir);
   cleanup.armed = false;
   return summary;
 }
