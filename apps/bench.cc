@@ -70,7 +70,7 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   std::string problem;
   if (!options.Check(&problem)) throw InputError(options.input, "bad options: " + problem);
   FrameSourceOptions source_options = options.source;
-  source_options.load_color = options.peers;  // RgbdOdometry needs intensity images
+  source_options.load_color = true;  // our SURF features and RgbdOdometry need intensity
   std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, source_options);
   const Camera camera = source->camera();
 

@@ -87,7 +87,7 @@ void RegisterCommands(CLI::App& app) {
     cmd->callback([options, args, range] {
       options->input = args->input;
       options->source = args->ToOptions();
-      options->source.load_color = false;  // tracking uses depth only so far
+      options->source.load_color = options->tracker.use_features;  // SURF needs colour
       if (!range->empty()) ParseFrameRange(*range, &options->first_frame, &options->end_frame);
       const ReconstructSummary s = RunReconstruct(*options);
       std::cout << "reconstruct: " << s.BriefReport() << "; outputs in " << options->out_dir

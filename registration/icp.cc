@@ -108,6 +108,7 @@ bool IcpOptions::Check(std::string* message) const {
   if (!(plane_sigma_m > 0) || !(plane_huber > 0) || !(feature_sigma_px > 0) ||
       !(feature_huber > 0) || !(feature_weight >= 0))
     return fail("sigmas and Huber thresholds must be positive, feature_weight >= 0");
+  if (feature_min_level < 0) return fail("feature_min_level must be >= 0");
   if (min_inliers < 0 || !(max_rmse_m > 0) || !(convergence_step > 0))
     return fail("need min_inliers >= 0, max_rmse_m > 0, convergence_step > 0");
   return true;
@@ -196,7 +197,7 @@ IcpSummary AlignPointToPlane(const DepthPyramid& reference, const DepthPyramid& 
       const int inliers = dense.inliers, valid = dense.valid;
       const double sum2 = dense.sum2;
       int feature_inliers = 0;
-      if (options.feature_weight > 0) {
+      if (options.feature_weight > 0 && level >= options.feature_min_level) {
         for (const FeatureCorrespondence& f : features) {
           if ((t * f.point_in_current).z() <= 0) continue;
           Eigen::Matrix<double, 2, 6> j;

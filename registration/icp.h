@@ -33,12 +33,15 @@ struct IcpOptions {
   // Depth-dependent scale (Kinect noise grows with depth squared): the residual of a pair at depth
   // z is divided by plane_sigma_m * sigma(z) / sigma(1 m), sigma(z) = a + b (z - 0.4)^2.
   bool depth_weighting = true;
-  double noise_a_m = 0.0012;       // a, metres (Nguyen et al. 2012)
-  double noise_b_per_m = 0.0019;   // b, 1/metres
-  double plane_huber = 1.0;        // Huber threshold in units of plane_sigma_m
-  double feature_sigma_px = 2.0;   // feature reprojection scale, pixels
-  double feature_huber = 2.0;      // Huber threshold in units of feature_sigma_px
-  double feature_weight = 1.0;     // multiplies every feature term (0 = dense only)
+  double noise_a_m = 0.0012;      // a, metres (Nguyen et al. 2012)
+  double noise_b_per_m = 0.0019;  // b, 1/metres
+  double plane_huber = 1.0;       // Huber threshold in units of plane_sigma_m
+  double feature_sigma_px = 2.0;  // feature reprojection scale, pixels
+  double feature_huber = 2.0;     // Huber threshold in units of feature_sigma_px
+  double feature_weight = 1.0;    // multiplies every feature term (0 = dense only)
+  // Features pull the coarse levels into the right basin; finer levels (index < this, 0 = full
+  // resolution) are left to the dense term, which is more precise there.
+  int feature_min_level = 1;
   int min_inliers = 1000;          // fewer pairs at the finest level: failure
   double max_rmse_m = 0.03;        // larger final point-to-plane RMSE: failure
   double convergence_step = 1e-6;  // stop a level when |xi| falls below, m / rad

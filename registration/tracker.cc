@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <opencv2/imgproc.hpp>
 
 #include "acquisition/errors.h"
 
@@ -9,7 +10,7 @@ namespace gf {
 
 bool KeyframePolicy::Check(std::string* message) const {
   if (!(max_rotation_deg > 0) || !(max_translation_m > 0) ||
-      !(min_overlap >= 0 && min_overlap <= 1)) {
+      !(min_overlap >= 0 && min_overlap <= 1) || min_feature_inliers < 0) {
     if (message) *message = "keyframe policy: need positive thresholds and min_overlap in [0, 1]";
     return false;
   }
@@ -25,7 +26,12 @@ bool TrackerOptions::Check(std::string* message) const {
     if (message) *message = "max_jump_m and max_jump_deg must be positive";
     return false;
   }
-  return icp.Check(message) && keyframes.Check(message);
+  if (!(restart_m > 0) || !(restart_deg > 0)) {
+    if (message) *message = "restart_m and restart_deg must be positive";
+    return false;
+  }
+  return icp.Check(message) && keyframes.Check(message) && surf.Check(message) &&
+         match.Check(message) && ransac.Check(message);
 }
 
 const char* TrackingStatusName(TrackingStatus status) {
@@ -53,11 +59,33 @@ FrameToKeyframeTracker::FrameToKeyframeTracker(const Camera& camera, const Track
   GF_CHECK(options_.Check(&problem), problem);
 }
 
+FrameToKeyframeTracker::Features FrameToKeyframeTracker::ExtractFeatures(
+    const RgbdFrame& frame) const {
+  Features f;
+  if (!options_.use_features || frame.color.empty()) return f;
+  cv::Mat gray;
+  cv::cvtColor(frame.color, gray, cv::COLOR_BGR2GRAY);
+  SurfFeatures surf = DetectAndDescribeSurf(gray, options_.surf);
+  f.keypoints = std::move(surf.keypoints);
+  f.descriptors = surf.descriptors;
+  for (const cv::KeyPoint& k : f.keypoints) {
+    const int u = static_cast<int>(std::lround(k.pt.x)), v = static_cast<int>(std::lround(k.pt.y));
+    const float z = (u >= 0 && v >= 0 && u < frame.depth.cols && v < frame.depth.rows)
+                        ? frame.depth.at<float>(v, u)
+                        : 0.f;
+    f.points.push_back(z > 0 ? camera_.BackProject({k.pt.x, k.pt.y}, z)
+                             : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  }
+  return f;
+}
+
 TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& frame) {
   TrackingResult result;
   DepthPyramid current = BuildDepthPyramid(frame.depth, camera_, options_.pyramid_levels);
+  Features features = ExtractFeatures(frame);
   if (!initialized_) {
     initialized_ = true;
+    keyframe_features_ = std::move(features);
     keyframe_ = std::move(current);
     world_from_keyframe_ = world_from_previous_ = SE3();
     velocity_ = SE3();
@@ -68,8 +96,36 @@ TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& frame) {
     return result;
   }
   const SE3 predicted = world_from_previous_ * (options_.constant_velocity ? velocity_ : SE3());
-  const SE3 keyframe_from_predicted = world_from_keyframe_.Inverse() * predicted;
-  result.icp = AlignPointToPlane(keyframe_, current, keyframe_from_predicted, options_.icp);
+  SE3 keyframe_from_predicted = world_from_keyframe_.Inverse() * predicted;
+  std::vector<FeatureCorrespondence> correspondences;
+  if (!features.keypoints.empty() && !keyframe_features_.keypoints.empty()) {
+    const std::vector<cv::DMatch> matches =
+        MatchDescriptors(features.keypoints, features.descriptors, keyframe_features_.keypoints,
+                         keyframe_features_.descriptors, options_.match);
+    std::vector<Eigen::Vector3d> source, target;
+    std::vector<const cv::DMatch*> used;
+    for (const cv::DMatch& m : matches) {
+      const Eigen::Vector3d& p = features.points[m.queryIdx];
+      const Eigen::Vector3d& q = keyframe_features_.points[m.trainIdx];
+      if (!p.allFinite() || !q.allFinite()) continue;
+      source.push_back(p);
+      target.push_back(q);
+      used.push_back(&m);
+    }
+    result.ransac = EstimateRigidRansac(source, target, options_.ransac);
+    if (result.ransac.success) {
+      for (int i : result.ransac.inlier_indices) {
+        const cv::KeyPoint& k = keyframe_features_.keypoints[used[i]->trainIdx];
+        correspondences.push_back({source[i], Eigen::Vector2d(k.pt.x, k.pt.y)});
+      }
+      const SE3 disagreement = keyframe_from_predicted.Inverse() * result.ransac.target_from_source;
+      if (disagreement.TranslationNorm() > options_.restart_m ||
+          disagreement.RotationAngle() * 180.0 / M_PI > options_.restart_deg)
+        keyframe_from_predicted = result.ransac.target_from_source;
+    }
+  }
+  result.icp =
+      AlignPointToPlane(keyframe_, current, keyframe_from_predicted, options_.icp, correspondences);
   result.overlap = result.icp.valid_points ? static_cast<double>(result.icp.overlapping_points) /
                                                  result.icp.valid_points
                                            : 0.0;
@@ -81,6 +137,7 @@ TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& frame) {
     result.status = TrackingStatus::kLost;
     result.world_from_camera = world_from_previous_;
     keyframe_ = std::move(current);
+    keyframe_features_ = std::move(features);
     world_from_keyframe_ = world_from_previous_;
     velocity_ = SE3();
     ++keyframes_;
@@ -93,10 +150,13 @@ TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& frame) {
   velocity_ = world_from_previous_.Inverse() * result.world_from_camera;
   world_from_previous_ = result.world_from_camera;
   const KeyframePolicy& k = options_.keyframes;
+  const bool few_features = options_.use_features && !frame.color.empty() &&
+                            result.ransac.inliers < k.min_feature_inliers;
   if (keyframe_from_current.RotationAngle() * 180.0 / M_PI > k.max_rotation_deg ||
       keyframe_from_current.TranslationNorm() > k.max_translation_m ||
-      result.overlap < k.min_overlap) {
+      result.overlap < k.min_overlap || few_features) {
     keyframe_ = std::move(current);
+    keyframe_features_ = std::move(features);
     world_from_keyframe_ = result.world_from_camera;
     ++keyframes_;
     result.new_keyframe = true;

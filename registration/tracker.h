@@ -19,6 +19,8 @@
 #include "acquisition/se3.h"
 #include "registration/depth_pyramid.h"
 #include "registration/icp.h"
+#include "registration/ransac.h"
+#include "registration/surf.h"
 
 namespace gf {
 
@@ -26,12 +28,27 @@ struct KeyframePolicy {
   double max_rotation_deg = 5.0;    // new keyframe beyond this rotation from the keyframe
   double max_translation_m = 0.02;  // ... or this translation, metres
   double min_overlap = 0.7;         // ... or when fewer of the frame's points land on it
+  int min_feature_inliers = 25;     // ... or when fewer features match it (features on)
   bool Check(std::string* message = nullptr) const;
 };
 
 struct TrackerOptions {
   int pyramid_levels = 3;  // must cover icp.iterations
   IcpOptions icp;
+  // Sparse features (needs colour): SURF matches to the keyframe, 3D-3D RANSAC, and the RANSAC
+  // inliers as the feature term of ICP's joint cost. RANSAC's pose replaces the constant-velocity
+  // prediction when the two differ by more than restart_m / restart_deg.
+  bool use_features = true;
+  SurfOptions surf = [] {
+    SurfOptions s;
+    s.upright = true;  // a handheld camera barely rolls between frames: U-SURF, 40% faster
+    s.max_features = 800;
+    return s;
+  }();
+  MatchOptions match;
+  RansacOptions ransac;
+  double restart_m = 0.02;
+  double restart_deg = 2.0;
   KeyframePolicy keyframes;
   bool constant_velocity = true;  // predict with the last inter-frame motion
   double max_jump_m = 0.15;       // larger correction of the prediction: treated as lost
@@ -46,7 +63,8 @@ struct TrackingResult {
   TrackingStatus status = TrackingStatus::kInitialized;
   SE3 world_from_camera;
   bool new_keyframe = false;
-  double overlap = 0;  // share of the frame's points that land on the keyframe's surface
+  double overlap = 0;   // share of the frame's points that land on the keyframe's surface
+  RansacReport ransac;  // feature alignment to the keyframe (empty when features are off)
   IcpSummary icp;
   std::string BriefReport() const;
 };
@@ -66,10 +84,19 @@ class FrameToKeyframeTracker : public Tracker {
   int keyframes() const { return keyframes_; }
 
  private:
+  // SURF keypoints of a frame with the 3D point under each (NaN where depth is missing).
+  struct Features {
+    std::vector<cv::KeyPoint> keypoints;
+    cv::Mat descriptors;
+    std::vector<Eigen::Vector3d> points;
+  };
+  Features ExtractFeatures(const RgbdFrame& frame) const;
+
   Camera camera_;
   TrackerOptions options_;
   bool initialized_ = false;
   DepthPyramid keyframe_;
+  Features keyframe_features_;
   SE3 world_from_keyframe_;
   SE3 world_from_previous_;
   SE3 velocity_;  // previous_from_current of the last step
