@@ -49,6 +49,8 @@ class Integral {
   }
   int rows() const { return rows_; }
   int cols() const { return cols_; }
+  const int* data() const { return data_; }
+  int stride() const { return stride_; }
 
  private:
   cv::Mat sum_;
@@ -79,17 +81,41 @@ ResponseLayer ComputeLayer(const Integral& ii, int filter, int step) {
   const int border = (filter - 1) / 2;
   // Normalise by the filter area, and to an image in [0, 1] (the integral holds 0..255).
   const double norm = 1.0 / (static_cast<double>(filter) * filter * 255.0);
+  // The eight boxes, as (row offset, col offset, height, width) from the sample.
+  const int boxes[8][4] = {{-border, -lobe + 1, filter, 2 * lobe - 1},  // Dyy outer
+                           {-lobe / 2, -lobe + 1, lobe, 2 * lobe - 1},  // Dyy middle lobe
+                           {-lobe + 1, -border, 2 * lobe - 1, filter},  // Dxx outer
+                           {-lobe + 1, -lobe / 2, 2 * lobe - 1, lobe},  // Dxx middle lobe
+                           {-lobe, 1, lobe, lobe},
+                           {1, -lobe, lobe, lobe},  // Dxy +
+                           {-lobe, -lobe, lobe, lobe},
+                           {1, 1, lobe, lobe}};  // Dxy -
+  // Away from the border every box lies inside the image: four reads per box at fixed offsets.
+  const int stride = ii.stride();
+  int corner[8][4];
+  for (int b = 0; b < 8; ++b) {
+    const int tl = boxes[b][0] * stride + boxes[b][1];
+    corner[b][0] = tl;
+    corner[b][1] = tl + boxes[b][3];
+    corner[b][2] = tl + boxes[b][2] * stride;
+    corner[b][3] = corner[b][2] + boxes[b][3];
+  }
+  auto box = [&](int r, int c, int b) {
+    if (r >= border && c >= border && r + border + 1 <= ii.rows() && c + border + 1 <= ii.cols()) {
+      const int* p = ii.data() + r * stride + c;
+      return static_cast<double>(p[corner[b][3]] - p[corner[b][2]] - p[corner[b][1]] +
+                                 p[corner[b][0]]);
+    }
+    return ii.Box(r + boxes[b][0], c + boxes[b][1], boxes[b][2], boxes[b][3]);
+  };
   for (int ar = 0; ar < layer.rows; ++ar) {
     const int r = ar * step;
     for (int ac = 0; ac < layer.cols; ++ac) {
       const int c = ac * step;
       // Dyy: three lobes stacked vertically, each lobe x (2 lobe - 1), the middle weighted -2.
-      const double dyy = ii.Box(r - border, c - lobe + 1, filter, 2 * lobe - 1) -
-                         3.0 * ii.Box(r - lobe / 2, c - lobe + 1, lobe, 2 * lobe - 1);
-      const double dxx = ii.Box(r - lobe + 1, c - border, 2 * lobe - 1, filter) -
-                         3.0 * ii.Box(r - lobe + 1, c - lobe / 2, 2 * lobe - 1, lobe);
-      const double dxy = ii.Box(r - lobe, c + 1, lobe, lobe) + ii.Box(r + 1, c - lobe, lobe, lobe) -
-                         ii.Box(r - lobe, c - lobe, lobe, lobe) - ii.Box(r + 1, c + 1, lobe, lobe);
+      const double dyy = box(r, c, 0) - 3.0 * box(r, c, 1);
+      const double dxx = box(r, c, 2) - 3.0 * box(r, c, 3);
+      const double dxy = box(r, c, 4) + box(r, c, 5) - box(r, c, 6) - box(r, c, 7);
       const double xx = dxx * norm, yy = dyy * norm, xy = dxy * norm;
       const size_t i = static_cast<size_t>(ar) * layer.cols + ac;
       layer.det[i] = static_cast<float>(xx * yy - 0.81 * xy * xy);
