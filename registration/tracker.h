@@ -42,7 +42,7 @@ struct TrackerOptions {
   SurfOptions surf = [] {
     SurfOptions s;
     s.upright = true;  // a handheld camera barely rolls between frames: U-SURF, 40% faster
-    s.max_features = 800;
+    s.max_features = 500;
     return s;
   }();
   MatchOptions match;
