@@ -78,6 +78,21 @@ std::vector<FolderFrameEntry> PairByTime(const std::vector<IndexLine>& depth,
   return entries;
 }
 
+// Depth and colour files paired by sorted position; the frame index stands in for time.
+std::vector<FolderFrameEntry> PairByIndex(const std::vector<std::string>& depths,
+                                          const std::vector<std::string>& colors) {
+  std::vector<FolderFrameEntry> entries;
+  for (size_t i = 0; i < depths.size(); ++i) {
+    FolderFrameEntry e;
+    e.timestamp = e.color_timestamp = static_cast<double>(i);
+    e.timestamp_text = std::to_string(i);
+    e.depth_path = depths[i];
+    e.color_path = colors[i];
+    entries.push_back(e);
+  }
+  return entries;
+}
+
 CameraFile LoadFolderCamera(const std::string& folder, const FrameSourceOptions& options) {
   const std::string path = options.camera_file.empty() ? (fs::path(folder) / "camera.json").string()
                                                        : options.camera_file;
@@ -261,15 +276,7 @@ std::unique_ptr<FolderFrameSource> OpenRedwoodFolder(const std::string& folder,
                                  fs::path(color_dir).filename().string() + "/ but " +
                                  std::to_string(depths.size()) + " depth images in " +
                                  fs::path(depth_dir).filename().string() + "/");
-  std::vector<FolderFrameEntry> entries;
-  for (size_t i = 0; i < depths.size(); ++i) {
-    FolderFrameEntry e;
-    e.timestamp = e.color_timestamp = static_cast<double>(i);
-    e.timestamp_text = std::to_string(i);
-    e.color_path = colors[i];
-    e.depth_path = depths[i];
-    entries.push_back(e);
-  }
+  std::vector<FolderFrameEntry> entries = PairByIndex(depths, colors);
   auto source = std::make_unique<FolderFrameSource>(
       "redwood", folder, camera, DepthConvention::FromDepthScale(camera.depth_scale),
       std::move(entries), options);
@@ -387,14 +394,7 @@ std::unique_ptr<FolderFrameSource> OpenKinectRawFolder(const std::string& folder
     if (colors.size() != depths.size())
       throw InputError(folder, std::to_string(depths.size()) + " depth images but " +
                                    std::to_string(colors.size()) + " colour images");
-    for (size_t i = 0; i < depths.size(); ++i) {
-      FolderFrameEntry e;
-      e.timestamp = e.color_timestamp = static_cast<double>(i);
-      e.timestamp_text = std::to_string(i);
-      e.depth_path = depths[i];
-      e.color_path = colors[i];
-      entries.push_back(e);
-    }
+    entries = PairByIndex(depths, colors);
     listed_depth = listed_color = static_cast<int>(depths.size());
   }
   const int pairs = static_cast<int>(entries.size());
