@@ -1,0 +1,121 @@
+#include "sfm/stereo_fill.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+
+#include "acquisition/depth.h"
+#include "datasets/synth.h"
+
+namespace gf {
+namespace {
+
+struct Rendered {
+  RgbdFrame frame;
+  synth::SynthFrame truth;
+};
+
+Rendered Render(const synth::Scene& scene, const SE3& pose, int index) {
+  Rendered r;
+  r.truth =
+      synth::RenderFrame(scene, synth::SynthCamera(), pose, synth::KinectModelOptions{}, 5, index);
+  r.frame.index = index;
+  r.frame.color = r.truth.color;
+  ConvertDepth(r.truth.raw_disparity, DepthConvention::KinectV1Raw11Bit(), {}, &r.frame.depth,
+               &r.frame.hole_mask);
+  return r;
+}
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 1.0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(q * (v.size() - 1))];
+}
+
+TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
+  synth::SynthOptions options;
+  options.frames = 30;
+  const synth::Scene scene = synth::Scene::Make("glass-table", 5);
+  const std::vector<SE3> poses = synth::MakeTrajectory(scene, options);
+  const Rendered a = Render(scene, poses[10], 10), b = Render(scene, poses[16], 16);
+  const SE3 key1_from_key2 = poses[10].Inverse() * poses[16];
+  const auto start = std::chrono::steady_clock::now();
+  const StereoFillResult r = FillHolesByStereo(a.frame, b.frame, synth::SynthCamera(),
+                                               key1_from_key2, StereoFillOptions{});
+  // Reported, not asserted (speed targets live in benchmarks).
+  std::printf(
+      "fill took %.0f ms\n",
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  ASSERT_TRUE(r.success) << r.BriefReport();
+
+  // Measured pixels are never changed.
+  cv::Mat measured = a.frame.hole_mask == 0;
+  EXPECT_EQ(cv::norm(r.filled_depth, a.frame.depth, cv::NORM_INF, measured), 0.0);
+  EXPECT_EQ(cv::countNonZero(r.fill_mask & measured), 0);
+
+  // Filled pixels against what the colour camera sees (through clear glass: the background).
+  std::vector<double> errors;
+  int ir_failing_holes = 0, ir_failing_filled = 0, clear_glass_filled = 0, clear_glass_as_glass = 0;
+  for (int y = 0; y < r.fill_mask.rows; ++y) {
+    for (int x = 0; x < r.fill_mask.cols; ++x) {
+      const int label = a.truth.label.at<uint8_t>(y, x);
+      const bool hole = a.frame.hole_mask.at<uint8_t>(y, x) != 0;
+      const bool filled = r.fill_mask.at<uint8_t>(y, x) != 0;
+      if (hole && label >= 1 && label <= 3) {
+        ++ir_failing_holes;
+        ir_failing_filled += filled;
+      }
+      if (!filled) continue;
+      const double truth = a.truth.visible_depth.at<float>(y, x);
+      const double fill = r.filled_depth.at<float>(y, x);
+      errors.push_back(std::abs(fill - truth) / truth);
+      if (label == static_cast<int>(synth::Material::kClearGlass)) {
+        ++clear_glass_filled;
+        const double glass = a.truth.true_depth.at<float>(y, x);
+        // "Reported as glass": the fill matches the glass surface and not the background seen
+        // through it (where the two are within a few percent they cannot be told apart).
+        clear_glass_as_glass +=
+            std::abs(fill - glass) < 0.02 * glass && std::abs(fill - truth) > 0.05 * truth;
+      }
+    }
+  }
+  const double fill_rate = static_cast<double>(ir_failing_filled) / std::max(1, ir_failing_holes);
+  std::printf(
+      "%s\nglossy/dark/textured-glass holes filled %.1f%% (%d of %d); filled pixels: "
+      "median error %.2f%%, 90th percentile %.2f%%; clear glass filled %d, nearer the glass "
+      "than the background %d\n",
+      r.BriefReport().c_str(), 100 * fill_rate, ir_failing_filled, ir_failing_holes,
+      100 * Percentile(errors, 0.5), 100 * Percentile(errors, 0.9), clear_glass_filled,
+      clear_glass_as_glass);
+  // Measured on this pair: 87% filled, median error 0.4%, 90th percentile 1.5%.
+  EXPECT_GT(fill_rate, 0.8);
+  EXPECT_LT(Percentile(errors, 0.5), 0.01);
+  EXPECT_LT(Percentile(errors, 0.9), 0.03);
+  // The goal is none; measured 29 of 1120 filled clear-glass pixels (2.6%) take the depth of the
+  // glass instead of the background behind it, next to the bottle's printed label (block
+  // matching spreads the label's depth). This bound guards against regressions meanwhile.
+  EXPECT_LE(clear_glass_as_glass, clear_glass_filled / 20);
+}
+
+TEST(FillHolesByStereo, RejectsShortBaselinesAndForwardMotion) {
+  RgbdFrame f;
+  f.color = cv::Mat(480, 640, CV_8UC3, cv::Scalar(0));
+  f.depth = cv::Mat(480, 640, CV_32FC1, cv::Scalar(1.0f));
+  f.hole_mask = cv::Mat(480, 640, CV_8UC1, cv::Scalar(0));
+  const Camera cam;
+  const SE3 short_step(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.01, 0, 0));
+  EXPECT_EQ(FillHolesByStereo(f, f, cam, short_step, {}).termination, "baseline too short");
+  const SE3 forward(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.0, 0.0, 0.2));
+  const StereoFillResult r = FillHolesByStereo(f, f, cam, forward, {});
+  EXPECT_FALSE(r.success);
+  EXPECT_NE(r.termination.find("forward motion"), std::string::npos);
+  EXPECT_EQ(cv::norm(r.filled_depth, f.depth, cv::NORM_INF), 0.0);
+  const SE3 vertical(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.0, 0.1, 0.0));
+  EXPECT_EQ(FillHolesByStereo(f, f, cam, vertical, {}).termination,
+            "vertical baseline (not handled yet)");
+}
+
+}  // namespace
+}  // namespace gf
