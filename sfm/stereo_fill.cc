@@ -33,7 +33,11 @@ cv::Mat Disparity(const cv::Ptr<cv::StereoSGBM>& sgbm, const cv::Mat& primary,
   }
   cv::Mat raw;
   sgbm->compute(a, b, raw);
-  if (!primary_is_left) cv::flip(raw, raw, 1);
+  if (!primary_is_left) {
+    cv::Mat mirrored;
+    cv::flip(raw, mirrored, 1);
+    raw = mirrored;
+  }
   cv::Mat d(raw.size(), CV_32F);
   for (int y = 0; y < raw.rows; ++y)
     for (int x = 0; x < raw.cols; ++x) {
@@ -41,6 +45,81 @@ cv::Mat Disparity(const cv::Ptr<cv::StereoSGBM>& sgbm, const cv::Mat& primary,
       d.at<float>(y, x) = v > 0 ? v / 16.0f : kNaN;  // SGBM: fixed point, 4 fractional bits
     }
   return d;
+}
+
+// Dense stereo points in the `first` camera's frame for a pair in which `first` is the left camera
+// after rectification (the configuration SGBM's left image needs). Returns false, computing
+// nothing, when `first` is the right one. second_from_first maps first-camera points into the
+// second camera (OpenCV's R, T).
+bool StereoPointsFromLeft(const cv::Mat& color_first, const cv::Mat& color_second,
+                          const Camera& camera, const SE3& second_from_first,
+                          const StereoFillOptions& options, std::vector<Eigen::Vector3d>* points) {
+  cv::Mat r(3, 3, CV_64F), t(3, 1, CV_64F);
+  const Eigen::Matrix3d rot = second_from_first.RotationMatrix();
+  for (int i = 0; i < 3; ++i) {
+    t.at<double>(i) = second_from_first.translation()[i];
+    for (int j = 0; j < 3; ++j) r.at<double>(i, j) = rot(i, j);
+  }
+  const cv::Size size(camera.width, camera.height);
+  cv::Mat r1, r2, p1, p2, q;
+  cv::stereoRectify(camera.CvK(), camera.CvDistortion(), camera.CvK(), camera.CvDistortion(), size,
+                    r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, 0.0, size);
+  const bool vertical = std::abs(p2.at<double>(1, 3)) > std::abs(p2.at<double>(0, 3));
+  const double shift = vertical ? p2.at<double>(1, 3) : p2.at<double>(0, 3);  // -f * baseline
+  if (shift >= 0) return false;  // `first` is the right camera: the caller swaps the pair
+  cv::Mat map1x, map1y, map2x, map2y, gray1, gray2, rect1, rect2;
+  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r1, p1, size, CV_32FC1, map1x,
+                              map1y);
+  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r2, p2, size, CV_32FC1, map2x,
+                              map2y);
+  cv::cvtColor(color_first, gray1, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(color_second, gray2, cv::COLOR_BGR2GRAY);
+  cv::remap(gray1, rect1, map1x, map1y, cv::INTER_LINEAR);
+  cv::remap(gray2, rect2, map2x, map2y, cv::INTER_LINEAR);
+  if (vertical) {  // make epipolar lines horizontal
+    cv::Mat t1, t2;
+    cv::transpose(rect1, t1);
+    cv::transpose(rect2, t2);
+    rect1 = t1;
+    rect2 = t2;
+  }
+  const int bs = options.block_size;
+  cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
+      0, options.num_disparities, bs, 8 * bs * bs, 32 * bs * bs, 1, 63, options.uniqueness_ratio,
+      options.speckle_window, options.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
+  cv::Mat d1 = Disparity(sgbm, rect1, rect2, true);
+  const cv::Mat d2 = Disparity(sgbm, rect2, rect1, false);
+  // Left-right consistency: the right view must see the same disparity at the matching pixel.
+  for (int y = 0; y < d1.rows; ++y) {
+    for (int x = 0; x < d1.cols; ++x) {
+      float& d = d1.at<float>(y, x);
+      if (std::isnan(d)) continue;
+      const int x2 = static_cast<int>(std::lround(x - d));
+      const float back = (x2 >= 0 && x2 < d2.cols) ? d2.at<float>(y, x2) : kNaN;
+      if (std::isnan(back) || std::abs(back - d) > options.max_lr_difference_px) d = kNaN;
+    }
+  }
+  if (vertical) {
+    cv::Mat back;
+    cv::transpose(d1, back);
+    d1 = back;
+  }
+  const double f = p1.at<double>(0, 0), rcx = p1.at<double>(0, 2), rcy = p1.at<double>(1, 2);
+  const double fb = -shift;  // f * baseline
+  Eigen::Matrix3d r1_eigen;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r1_eigen(i, j) = r1.at<double>(i, j);
+  const Eigen::Matrix3d first_from_rect = r1_eigen.transpose();
+  points->clear();
+  for (int v = 0; v < d1.rows; ++v) {
+    for (int u = 0; u < d1.cols; ++u) {
+      const float d = d1.at<float>(v, u);
+      if (std::isnan(d) || d <= 0) continue;
+      const double z = fb / d;
+      points->push_back(first_from_rect * Eigen::Vector3d((u - rcx) * z / f, (v - rcy) * z / f, z));
+    }
+  }
+  return true;
 }
 
 }  // namespace
@@ -86,96 +165,38 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   result.stereo_depth = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
   result.hole_pixels = cv::countNonZero(key1.hole_mask);
 
-  // The pair: OpenCV wants the second camera's pose in the first's frame as x2 = R x1 + T.
-  const SE3 key2_from_key1 = key1_from_key2.Inverse();
   if (key1_from_key2.TranslationNorm() < options.min_baseline_m) {
     result.termination = "baseline too short";
     return result;
   }
   // Epipole of camera 2 in image 1: inside the image means mostly forward motion.
   const Eigen::Vector3d center2 = key1_from_key2.translation();
-  if (center2.z() > 0) {
-    const Eigen::Vector2d epipole = camera.Project(center2);
-    if (camera.InImage(epipole)) {
-      result.termination = "forward motion (epipole inside the image)";
+  if (center2.z() > 0 && camera.InImage(camera.Project(center2))) {
+    result.termination = "forward motion (epipole inside the image)";
+    return result;
+  }
+  // Stereo runs with the left camera of the pair first; when that is keyframe 2, its points are
+  // moved into keyframe 1 with the known pose.
+  SE3 key1_from_points;
+  std::vector<Eigen::Vector3d> points;
+  if (!StereoPointsFromLeft(key1.color, key2.color, camera, key1_from_key2.Inverse(), options,
+                            &points)) {
+    key1_from_points = key1_from_key2;
+    if (!StereoPointsFromLeft(key2.color, key1.color, camera, key1_from_key2, options, &points)) {
+      result.termination = "rectification failed";
       return result;
     }
   }
-  cv::Mat r(3, 3, CV_64F), t(3, 1, CV_64F);
-  const Eigen::Matrix3d rot = key2_from_key1.RotationMatrix();
-  for (int i = 0; i < 3; ++i) {
-    t.at<double>(i) = key2_from_key1.translation()[i];
-    for (int j = 0; j < 3; ++j) r.at<double>(i, j) = rot(i, j);
-  }
-  const cv::Size size(camera.width, camera.height);
-  cv::Mat r1, r2, p1, p2, q;
-  cv::stereoRectify(camera.CvK(), camera.CvDistortion(), camera.CvK(), camera.CvDistortion(), size,
-                    r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, 0.0, size);
-  const bool vertical = std::abs(p2.at<double>(1, 3)) > std::abs(p2.at<double>(0, 3));
-  if (vertical) {
-    // Transposing the rectified pair to make epipolar lines horizontal loses almost every pixel
-    // in the left-right check on ICL-NUIM (cause not found yet): report it instead of an empty
-    // fill that looks fine.
-    result.termination = "vertical baseline (not handled yet)";
-    return result;
-  }
-  const double shift = vertical ? p2.at<double>(1, 3) : p2.at<double>(0, 3);  // -f B or +f B
-  // Camera 2 lies towards +x (or +y) of camera 1 when shift < 0: then image 1 is the left one.
-  const bool key1_is_left = shift < 0;
-  cv::Mat map1x, map1y, map2x, map2y, gray1, gray2, rect1, rect2;
-  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r1, p1, size, CV_32FC1, map1x,
-                              map1y);
-  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r2, p2, size, CV_32FC1, map2x,
-                              map2y);
-  cv::cvtColor(key1.color, gray1, cv::COLOR_BGR2GRAY);
-  cv::cvtColor(key2.color, gray2, cv::COLOR_BGR2GRAY);
-  cv::remap(gray1, rect1, map1x, map1y, cv::INTER_LINEAR);
-  cv::remap(gray2, rect2, map2x, map2y, cv::INTER_LINEAR);
-  if (vertical) {  // make epipolar lines horizontal
-    cv::transpose(rect1, rect1);
-    cv::transpose(rect2, rect2);
-  }
-  const int bs = options.block_size;
-  cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
-      0, options.num_disparities, bs, 8 * bs * bs, 32 * bs * bs, 1, 63, options.uniqueness_ratio,
-      options.speckle_window, options.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
-  cv::Mat d1 = Disparity(sgbm, rect1, rect2, key1_is_left);
-  const cv::Mat d2 = Disparity(sgbm, rect2, rect1, !key1_is_left);
-  // Left-right consistency: the other view must see the same disparity at the matching pixel.
-  for (int y = 0; y < d1.rows; ++y) {
-    for (int x = 0; x < d1.cols; ++x) {
-      float& d = d1.at<float>(y, x);
-      if (std::isnan(d)) continue;
-      const int x2 = static_cast<int>(std::lround(key1_is_left ? x - d : x + d));
-      const float back = (x2 >= 0 && x2 < d2.cols) ? d2.at<float>(y, x2) : kNaN;
-      if (std::isnan(back) || std::abs(back - d) > options.max_lr_difference_px) d = kNaN;
-    }
-  }
-  if (vertical) cv::transpose(d1, d1);
-
-  // Depth in the rectified camera 1, back into camera 1's image (nearest surface wins).
-  const double f = p1.at<double>(0, 0), rcx = p1.at<double>(0, 2), rcy = p1.at<double>(1, 2);
-  const double fb = std::abs(shift);  // f * baseline
-  Eigen::Matrix3d r1_eigen;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r1_eigen(i, j) = r1.at<double>(i, j);
-  const Eigen::Matrix3d cam1_from_rect = r1_eigen.transpose();
+  // Back into keyframe 1's image; the nearest surface wins.
   cv::Mat& stereo = result.stereo_depth;
-  for (int v = 0; v < d1.rows; ++v) {
-    for (int u = 0; u < d1.cols; ++u) {
-      const float d = d1.at<float>(v, u);
-      if (std::isnan(d) || d <= 0) continue;
-      const double z = fb / d;
-      const Eigen::Vector3d p =
-          cam1_from_rect * Eigen::Vector3d((u - rcx) * z / f, (v - rcy) * z / f, z);
-      if (p.z() < options.min_depth_m || p.z() > options.max_depth_m) continue;
-      const Eigen::Vector2d px = camera.ProjectDistorted(p);
-      const int x = static_cast<int>(std::lround(px.x())),
-                y = static_cast<int>(std::lround(px.y()));
-      if (x < 0 || y < 0 || x >= stereo.cols || y >= stereo.rows) continue;
-      float& cell = stereo.at<float>(y, x);
-      if (cell == 0.f || p.z() < cell) cell = static_cast<float>(p.z());
-    }
+  for (const Eigen::Vector3d& q : points) {
+    const Eigen::Vector3d p = key1_from_points * q;
+    if (p.z() < options.min_depth_m || p.z() > options.max_depth_m) continue;
+    const Eigen::Vector2d px = camera.ProjectDistorted(p);
+    const int x = static_cast<int>(std::lround(px.x())), y = static_cast<int>(std::lround(px.y()));
+    if (x < 0 || y < 0 || x >= stereo.cols || y >= stereo.rows) continue;
+    float& cell = stereo.at<float>(y, x);
+    if (cell == 0.f || p.z() < cell) cell = static_cast<float>(p.z());
   }
 
   // Block matching spreads a textured surface's depth over the textureless pixels next to it

@@ -3,12 +3,13 @@
 // measure are still textured in colour).
 //
 // Steps: check the pair (baseline, epipole outside the image: forward motion gives no usable
-// stereo; mostly vertical baselines are not handled yet and are reported as such), rectify both
-// colour images (cv::stereoRectify), compute disparity with cv::StereoSGBM in both directions (the
-// right view's by mirroring the images) and keep pixels that agree (left-right check), convert to
-// metric depth, warp it back into keyframe 1's image (z-buffer), then validate: the stereo depth
-// must agree with the Kinect on measured pixels around each hole, or that hole is left empty. Only
-// pixels the sensor left empty are filled; measured pixels are never changed.
+// stereo), rectify both colour images (cv::stereoRectify) with the pair's left camera first
+// (a mostly vertical baseline is transposed into a horizontal one), compute disparity with
+// cv::StereoSGBM in both directions (the right view's by mirroring the images) and keep pixels
+// that agree (left-right check), convert to metric depth in the left camera, move it into
+// keyframe 1 with the known pose and project it into keyframe 1's image (z-buffer), then validate:
+// the stereo depth must agree with the Kinect on measured pixels around each hole, or that hole is
+// left empty. Only pixels the sensor left empty are filled; measured pixels are never changed.
 //
 // No threads, no I/O. Usage:
 //   gf::StereoFillResult r = gf::FillHolesByStereo(key1, key2, camera, key1_from_key2, {});

@@ -112,9 +112,25 @@ TEST(FillHolesByStereo, RejectsShortBaselinesAndForwardMotion) {
   EXPECT_FALSE(r.success);
   EXPECT_NE(r.termination.find("forward motion"), std::string::npos);
   EXPECT_EQ(cv::norm(r.filled_depth, f.depth, cv::NORM_INF), 0.0);
-  const SE3 vertical(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.0, 0.1, 0.0));
-  EXPECT_EQ(FillHolesByStereo(f, f, cam, vertical, {}).termination,
-            "vertical baseline (not handled yet)");
+}
+
+// The same pair with the keyframes' roles swapped: keyframe 1 is now the right camera, so stereo
+// runs from keyframe 2 and its points are moved into keyframe 1.
+TEST(FillHolesByStereo, WorksWithTheKeyframeOnEitherSide) {
+  synth::SynthOptions options;
+  options.frames = 30;
+  const synth::Scene scene = synth::Scene::Make("glass-table", 5);
+  const std::vector<SE3> poses = synth::MakeTrajectory(scene, options);
+  const Rendered a = Render(scene, poses[10], 10), b = Render(scene, poses[16], 16);
+  const StereoFillResult left = FillHolesByStereo(a.frame, b.frame, synth::SynthCamera(),
+                                                  poses[10].Inverse() * poses[16], {});
+  const StereoFillResult right = FillHolesByStereo(b.frame, a.frame, synth::SynthCamera(),
+                                                   poses[16].Inverse() * poses[10], {});
+  ASSERT_TRUE(left.success && right.success) << left.BriefReport() << " / " << right.BriefReport();
+  EXPECT_GT(right.filled_pixels, 0.5 * right.hole_pixels) << right.BriefReport();
+  EXPECT_LT(right.stereo_error_median, 0.01) << right.BriefReport();
+  EXPECT_GT(cv::countNonZero(right.stereo_depth > 0),
+            0.8 * cv::countNonZero(left.stereo_depth > 0));
 }
 
 }  // namespace
