@@ -93,9 +93,14 @@ std::vector<FolderFrameEntry> PairByIndex(const std::vector<std::string>& depths
   return entries;
 }
 
+// --camera FILE when given, else <folder>/camera.json.
+std::string CameraPathFor(const std::string& folder, const FrameSourceOptions& options) {
+  return options.camera_file.empty() ? (fs::path(folder) / "camera.json").string()
+                                     : options.camera_file;
+}
+
 CameraFile LoadFolderCamera(const std::string& folder, const FrameSourceOptions& options) {
-  const std::string path = options.camera_file.empty() ? (fs::path(folder) / "camera.json").string()
-                                                       : options.camera_file;
+  const std::string path = CameraPathFor(folder, options);
   if (!IsRegularFile(path))
     throw InputError(path, "camera intrinsics not found (add camera.json or pass --camera FILE)");
   return LoadCameraFile(path);
@@ -332,8 +337,7 @@ bool ParseFakenectName(const std::string& name, std::string* time_text, double* 
 }
 
 CameraFile KinectCamera(const std::string& folder, const FrameSourceOptions& options) {
-  const std::string path = options.camera_file.empty() ? (fs::path(folder) / "camera.json").string()
-                                                       : options.camera_file;
+  const std::string path = CameraPathFor(folder, options);
   if (IsRegularFile(path)) return LoadCameraFile(path);
   if (!options.camera_file.empty()) throw InputError(path, "file not found");
   spdlog::warn("{}: no camera.json; using a nominal Kinect v1 calibration (pass --camera FILE)",

@@ -228,6 +228,15 @@ SynthFrame RenderFrame(const Scene& scene, const Camera& camera, const SE3& worl
   return f;
 }
 
+RgbdFrame ToRgbdFrame(const SynthFrame& f, int index) {
+  RgbdFrame frame;
+  frame.index = index;
+  frame.color = f.color;
+  ConvertDepth(f.raw_disparity, DepthConvention::KinectV1Raw11Bit(), {}, &frame.depth,
+               &frame.hole_mask);
+  return frame;
+}
+
 std::string SynthSummary::BriefReport() const {
   char buffer[160];
   std::snprintf(buffer, sizeof(buffer), "%d frames, %.1f ms/frame, sensor hole fraction %.3f",
@@ -273,13 +282,9 @@ SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out
       SynthFrame f = RenderFrame(scene, camera, poses[i], options.kinect, options.seed, i);
       const double t = i / options.fps;
       const std::string ts = TimeText(t);
-      RgbdFrame frame;
-      frame.index = i;
+      RgbdFrame frame = ToRgbdFrame(f, i);
       frame.timestamp = frame.color_timestamp = t;
       frame.timestamp_text = ts;
-      frame.color = f.color;
-      ConvertDepth(f.raw_disparity, DepthConvention::KinectV1Raw11Bit(), {}, &frame.depth,
-                   &frame.hole_mask);
       sink.Write(frame);
       const std::string counter = std::to_string(i);
       WriteRawPgm((stage / "raw" / ("d-" + ts + "-" + counter + ".pgm")).string(), f.raw_disparity);

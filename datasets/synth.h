@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "acquisition/camera.h"
+#include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
 #include "datasets/scene.h"
 
@@ -76,6 +77,10 @@ std::vector<SE3> MakeTrajectory(const Scene& scene, const SynthOptions& options)
 // Renders one frame; frame_index seeds its sensor noise.
 SynthFrame RenderFrame(const Scene& scene, const Camera& camera, const SE3& world_from_camera,
                        const KinectModelOptions& kinect, uint32_t seed, int frame_index);
+
+// The frame as a frame source delivers it: colour, and metric depth with its hole mask converted
+// from the raw disparity exactly as a recorded raw Kinect frame is (timestamps left to the caller).
+RgbdFrame ToRgbdFrame(const SynthFrame& frame, int index);
 
 struct SynthSummary {
   int frames = 0;

@@ -94,9 +94,7 @@ TEST(AlignPointToPlane, RecoversTheMotionBetweenTwoSyntheticKinectFrames) {
   const Camera camera = synth::SynthCamera();
   auto depth_of = [&](int i) {
     const synth::SynthFrame f = synth::RenderFrame(scene, camera, poses[i], options.kinect, 2, i);
-    cv::Mat depth;
-    ConvertDepth(f.raw_disparity, DepthConvention::KinectV1Raw11Bit(), {}, &depth, nullptr);
-    return BuildDepthPyramid(depth, camera, 3);
+    return BuildDepthPyramid(synth::ToRgbdFrame(f, i).depth, camera, 3);
   };
   const DepthPyramid ref = depth_of(10), cur = depth_of(13);
   const SE3 truth = poses[10].Inverse() * poses[13];

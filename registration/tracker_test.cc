@@ -13,12 +13,8 @@ namespace {
 RgbdFrame SynthDepthFrame(const synth::Scene& scene, const SE3& pose, int index) {
   const synth::SynthFrame f =
       synth::RenderFrame(scene, synth::SynthCamera(), pose, synth::KinectModelOptions{}, 4, index);
-  RgbdFrame frame;
-  frame.index = index;
+  RgbdFrame frame = synth::ToRgbdFrame(f, index);
   frame.timestamp = index / 30.0;
-  frame.color = f.color;
-  ConvertDepth(f.raw_disparity, DepthConvention::KinectV1Raw11Bit(), {}, &frame.depth,
-               &frame.hole_mask);
   return frame;
 }
 

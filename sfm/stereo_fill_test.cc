@@ -21,10 +21,7 @@ Rendered Render(const synth::Scene& scene, const SE3& pose, int index) {
   Rendered r;
   r.truth =
       synth::RenderFrame(scene, synth::SynthCamera(), pose, synth::KinectModelOptions{}, 5, index);
-  r.frame.index = index;
-  r.frame.color = r.truth.color;
-  ConvertDepth(r.truth.raw_disparity, DepthConvention::KinectV1Raw11Bit(), {}, &r.frame.depth,
-               &r.frame.hole_mask);
+  r.frame = synth::ToRgbdFrame(r.truth, index);
   return r;
 }
 
