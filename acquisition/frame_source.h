@@ -80,7 +80,6 @@ class FolderFrameSource : public FrameSource {
   std::optional<int> FrameCount() const override { return static_cast<int>(entries_.size()); }
   bool Next(RgbdFrame* frame) override;
 
-  const std::vector<FolderFrameEntry>& entries() const { return entries_; }
   // Frames that the index listed but could not pair (e.g. depth without colour within 20 ms).
   int unmatched_depth = 0;
   int unmatched_color = 0;
