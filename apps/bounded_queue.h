@@ -24,6 +24,15 @@ class BoundedQueue {
     return true;
   }
 
+  // Never blocks: false when the queue is full or closed (the item is dropped).
+  bool TryPush(T item) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (closed_ || items_.size() >= capacity_) return false;
+    items_.push_back(std::move(item));
+    not_empty_.notify_one();
+    return true;
+  }
+
   // False when the queue is closed and empty.
   bool Pop(T* item) {
     std::unique_lock<std::mutex> lock(mutex_);

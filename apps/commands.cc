@@ -80,14 +80,19 @@ void RegisterCommands(CLI::App& app) {
     auto args = std::make_shared<InputArgs>();
     auto range = std::make_shared<std::string>();
     CLI::App* cmd = app.add_subcommand(
-        "reconstruct", "track the camera through INPUT; write DIR/trajectory.txt and report.json");
+        "reconstruct",
+        "track the camera through INPUT and fill keyframe depth holes by stereo; write "
+        "DIR/trajectory.txt, keyframes/, camera.json and report.json");
     AddInputArgs(cmd, args.get());
     cmd->add_option("--out", options->out_dir, "run folder")->required();
     cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
-    cmd->callback([options, args, range] {
+    auto no_fill = std::make_shared<bool>(false);
+    cmd->add_flag("--no-fill", *no_fill, "track only: no stereo hole filling of keyframes");
+    cmd->callback([options, args, range, no_fill] {
+      options->fill = !*no_fill;
       options->input = args->input;
       options->source = args->ToOptions();
-      options->source.load_color = options->tracker.use_features;  // SURF needs colour
+      options->source.load_color = options->tracker.use_features || options->fill;
       if (!range->empty()) ParseFrameRange(*range, &options->first_frame, &options->end_frame);
       const ReconstructSummary s = RunReconstruct(*options);
       std::cout << "reconstruct: " << s.BriefReport() << "; outputs in " << options->out_dir

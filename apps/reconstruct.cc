@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "acquisition/camera.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/trajectory.h"
@@ -51,13 +52,16 @@ bool ReconstructOptions::Check(std::string* message) const {
     if (message) *message = "need 0 <= A < B in --frames A:B";
     return false;
   }
-  return source.Check(message) && tracker.Check(message);
+  return source.Check(message) && tracker.Check(message) &&
+         (!fill || fill_options.Check(message));
 }
 
 std::string ReconstructSummary::BriefReport() const {
   char buffer[200];
-  std::snprintf(buffer, sizeof(buffer), "%d frames in %.1f s (%.1f fps), %d keyframes, %d lost",
-                frames, seconds, fps, keyframes, lost);
+  std::snprintf(buffer, sizeof(buffer),
+                "%d frames in %.1f s (%.1f fps), %d keyframes, %d lost, %ld of %ld keyframe hole "
+                "pixels filled",
+                frames, seconds, fps, keyframes, lost, filled_pixels, hole_pixels);
   return buffer;
 }
 
@@ -112,6 +116,12 @@ ReconstructSummary RunReconstruct(const ReconstructOptions& options) {
   });
 
   FrameToKeyframeTracker tracker(source->camera(), options.tracker);
+  std::unique_ptr<FillStage> fill;
+  if (options.fill) {
+    FillStageOptions fill_options = options.fill_options;
+    fill_options.drop_when_busy = !total.has_value();  // live: never make tracking wait
+    fill = std::make_unique<FillStage>(source->camera(), fill_options, options.out_dir);
+  }
   Trajectory trajectory;
   std::vector<double> read_ms, track_ms;
   ReconstructSummary summary;
@@ -130,6 +140,10 @@ ReconstructSummary RunReconstruct(const ReconstructOptions& options) {
         spdlog::debug("frame {} ({}): tracking lost: {}", item.frame.index,
                       item.frame.timestamp_text, r.BriefReport());
       }
+      if (fill && r.new_keyframe && r.status != TrackingStatus::kLost) {
+        if (item.frame.color.empty()) throw InputError(item.frame.depth_path.empty() ? options.input : item.frame.depth_path, "the stereo fill needs colour images (or --no-fill)");
+        fill->Offer(item.frame, r.world_from_camera);
+      }
       trajectory.push_back({item.frame.timestamp, item.frame.timestamp_text, r.world_from_camera});
       ++summary.frames;
       progress.Update(summary.frames);
@@ -142,11 +156,22 @@ ReconstructSummary RunReconstruct(const ReconstructOptions& options) {
   reader.join();
   progress.Finish();
   summary.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (fill) {
+    const auto t0 = Clock::now();
+    fill->Finish();
+    spdlog::info("stereo fill finished {:.1f} s after tracking", Ms(t0, Clock::now()) / 1000.0);
+  }
   summary.fps = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
   summary.keyframes = tracker.keyframes();
   if (trajectory.empty()) throw InputError(options.input, "no frames in the selected range");
 
   WriteTumTrajectory((fs::path(options.out_dir) / "trajectory.txt").string(), trajectory);
+  // The camera of the run's images (frames arrive registered to colour; keyframe depth PNGs are
+  // millimetres), for colmap-export and other readers of the run folder.
+  CameraFile run_camera;
+  run_camera.camera = source->camera();
+  run_camera.depth_scale = 1000.0;
+  SaveCameraFile((fs::path(options.out_dir) / "camera.json").string(), run_camera);
   nlohmann::ordered_json report;
   report["input"] = {{"path", options.input},
                      {"kind", source->Kind()},
@@ -161,7 +186,15 @@ ReconstructSummary RunReconstruct(const ReconstructOptions& options) {
                       {"keyframe_max_rotation_deg", t.keyframes.max_rotation_deg},
                       {"keyframe_max_translation_m", t.keyframes.max_translation_m},
                       {"keyframe_min_overlap", t.keyframes.min_overlap},
-                      {"threads", "reader + tracker"},
+                      {"stereo_fill", options.fill},
+                      {"pair_min_matches", options.fill_options.pairs.min_matches},
+                      {"pair_min_baseline_m", options.fill_options.pairs.min_baseline_m},
+                      {"pair_max_baseline_m", options.fill_options.pairs.max_baseline_m},
+                      {"pair_max_rotation_deg", options.fill_options.pairs.max_rotation_deg},
+                      {"sgbm_num_disparities", options.fill_options.stereo.num_disparities},
+                      {"sgbm_block_size", options.fill_options.stereo.block_size},
+                      {"fill_max_ring_error", options.fill_options.stereo.max_ring_error},
+                      {"threads", options.fill ? "reader + tracker + stereo" : "reader + tracker"},
                       {"hardware_concurrency", std::thread::hardware_concurrency()}};
   report["frames"] = summary.frames;
   report["fps"] = summary.fps;
@@ -169,7 +202,11 @@ ReconstructSummary RunReconstruct(const ReconstructOptions& options) {
   report["keyframes"] = summary.keyframes;
   report["tracking"] = {{"lost_frames", summary.lost}};
   report["loops"] = nullptr;    // loop closure: not built yet
-  report["fill"] = nullptr;     // stereo fill: not built yet
+  report["fill"] = fill ? fill->Report() : nlohmann::ordered_json();
+  if (fill) {
+    summary.hole_pixels = report["fill"]["hole_pixels"];
+    summary.filled_pixels = report["fill"]["filled_pixels"];
+  }
   report["surfels"] = nullptr;  // surfel fusion: not built yet
   WriteTextFileAtomically((fs::path(options.out_dir) / "report.json").string(),
                           report.dump(2) + "\n");

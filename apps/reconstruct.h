@@ -2,16 +2,20 @@
 //
 // Stages run in threads joined by bounded queues (DESIGN.md): a reader decodes frames while the
 // tracker aligns the previous ones. Today the pipeline tracks the camera (frame-to-keyframe ICP);
-// stereo fill, loop closure and surfel fusion join it as they land.
+// every new keyframe goes to the asynchronous stereo-fill stage (apps/fill_stage.h), which fills
+// its depth holes from a partner keyframe; loop closure and surfel fusion join as they land.
 //
-// Outputs in DIR: trajectory.txt (TUM format, the input's depth timestamps) and report.json
-// (input, config, frames, fps, per-stage median/max milliseconds, keyframes, tracking losses;
-// loops/fill/surfels are null until those stages exist). Each file is written atomically.
+// Outputs in DIR: trajectory.txt (TUM format, the input's depth timestamps), keyframes/ (hole
+// mask, filled depth and overlay per keyframe, see fill_stage.h), camera.json (the intrinsics
+// used) and report.json (input, config, frames, fps, per-stage median/max milliseconds,
+// keyframes, tracking losses, fill; loops/surfels are null until those stages exist). Each file is
+// written atomically.
 #pragma once
 
 #include <string>
 
 #include "acquisition/frame_source.h"
+#include "apps/fill_stage.h"
 #include "registration/tracker.h"
 
 namespace gf {
@@ -24,6 +28,8 @@ struct ReconstructOptions {
   FrameSourceOptions source;
   TrackerOptions tracker;
   int queue_capacity = 8;  // frames buffered between reader and tracker
+  bool fill = true;        // stereo hole filling of keyframes (--no-fill turns it off)
+  FillStageOptions fill_options;
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -31,6 +37,8 @@ struct ReconstructSummary {
   int frames = 0;
   int lost = 0;
   int keyframes = 0;
+  long hole_pixels = 0;    // in keyframes handed to the fill
+  long filled_pixels = 0;
   double seconds = 0;
   double fps = 0;
   std::string BriefReport() const;

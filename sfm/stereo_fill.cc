@@ -9,6 +9,7 @@
 
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
+#include "sfm/plane_sweep.h"
 
 namespace gf {
 namespace {
@@ -122,7 +123,79 @@ bool StereoPointsFromLeft(const cv::Mat& color_first, const cv::Mat& color_secon
   return true;
 }
 
+
+// Photometric check of a filled pixel in a third keyframe: the filled point, projected into the
+// third view, must look like it does in keyframe 1 (NCC of small patches; mean grey levels for
+// textureless patches). Points the third view's sensor sees behind a nearer surface, or outside
+// its image, cannot be checked and pass.
+class PhotometricCheck {
+ public:
+  PhotometricCheck(const RgbdFrame& key1, const ThirdView& third, const Camera& camera,
+                   const StereoFillOptions& options)
+      : camera_(camera), options_(options), third_(third) {
+    if (third.frame == nullptr || third.frame->color.empty()) return;
+    cv::cvtColor(key1.color, gray1_, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(third.frame->color, gray3_, cv::COLOR_BGR2GRAY);
+    key3_from_key1_ = third.key1_from_key3.Inverse();
+  }
+  bool active() const { return !gray3_.empty(); }
+
+  // 1 when unchecked, the patch correlation (or mean agreement) in (0, 1] when it passes, 0 when
+  // the third view contradicts the depth.
+  double Agreement(int x, int y, double depth) const {
+    if (!active()) return 1.0;
+    const int r = options_.photometric_patch_px / 2;
+    const Eigen::Vector2d n = camera_.Undistort(
+        {(x - camera_.cx) / camera_.fx, (y - camera_.cy) / camera_.fy});
+    const Eigen::Vector3d p3 = key3_from_key1_ * Eigen::Vector3d(n.x() * depth, n.y() * depth, depth);
+    if (p3.z() <= 0) return 1.0;
+    const Eigen::Vector2d q = camera_.ProjectDistorted(p3);
+    const int qx = static_cast<int>(std::lround(q.x())), qy = static_cast<int>(std::lround(q.y()));
+    if (qx - r < 0 || qy - r < 0 || qx + r >= gray3_.cols || qy + r >= gray3_.rows) return 1.0;
+    if (x - r < 0 || y - r < 0 || x + r >= gray1_.cols || y + r >= gray1_.rows) return 1.0;
+    const float sensor3 = third_.frame->depth.at<float>(qy, qx);
+    if (sensor3 > 0 && sensor3 < p3.z() * (1.0 - options_.occlusion_margin)) return 1.0;
+    double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+    const int count = (2 * r + 1) * (2 * r + 1);
+    for (int dy = -r; dy <= r; ++dy) {
+      for (int dx = -r; dx <= r; ++dx) {
+        const double a = gray1_.at<uint8_t>(y + dy, x + dx), b = gray3_.at<uint8_t>(qy + dy, qx + dx);
+        sa += a;
+        sb += b;
+        saa += a * a;
+        sbb += b * b;
+        sab += a * b;
+      }
+    }
+    const double ma = sa / count, mb = sb / count;
+    const double va = std::max(0.0, saa / count - ma * ma), vb = std::max(0.0, sbb / count - mb * mb);
+    const double min_var = options_.min_patch_std * options_.min_patch_std;
+    if (va < min_var || vb < min_var) {
+      const double diff = std::abs(ma - mb);
+      return diff <= options_.max_mean_difference ? 1.0 - 0.5 * diff / options_.max_mean_difference
+                                                 : 0.0;
+    }
+    const double ncc = (sab / count - ma * mb) / std::sqrt(va * vb);
+    return ncc >= options_.min_ncc ? ncc : 0.0;
+  }
+
+ private:
+  const Camera& camera_;
+  const StereoFillOptions& options_;
+  ThirdView third_;
+  cv::Mat gray1_, gray3_;
+  SE3 key3_from_key1_;
+};
+
 }  // namespace
+
+bool EpipoleInsideImage(const Camera& camera, const SE3& a_from_b, double margin_px) {
+  const Eigen::Vector3d c = a_from_b.translation();  // b's centre in a's frame
+  if (std::abs(c.z()) < 1e-12) return false;         // sideways: epipole at infinity
+  const double u = camera.fx * c.x() / c.z() + camera.cx, v = camera.fy * c.y() / c.z() + camera.cy;
+  return u > -margin_px && v > -margin_px && u < camera.width + margin_px &&
+         v < camera.height + margin_px;
+}
 
 bool StereoFillOptions::Check(std::string* message) const {
   auto fail = [&](const char* m) {
@@ -130,6 +203,7 @@ bool StereoFillOptions::Check(std::string* message) const {
     return false;
   };
   if (!(min_baseline_m > 0)) return fail("min_baseline_m must be positive");
+  if (!(epipole_margin_px >= 0)) return fail("epipole_margin_px must be >= 0");
   if (num_disparities < 16 || num_disparities % 16)
     return fail("num_disparities: positive multiple of 16");
   if (block_size < 1 || block_size % 2 == 0) return fail("block_size must be odd");
@@ -137,23 +211,27 @@ bool StereoFillOptions::Check(std::string* message) const {
     return fail("need lr difference >= 0 and 0 < min_depth_m < max_depth_m");
   if (ring_px < 1 || min_ring_samples < 1 || !(max_ring_error > 0) || !(max_pair_error > 0))
     return fail("ring and error thresholds must be positive");
-  return true;
+  if (photometric_patch_px < 3 || photometric_patch_px % 2 == 0 || !(min_ncc > -1) ||
+      !(min_patch_std >= 0) || !(max_mean_difference > 0) || !(occlusion_margin >= 0))
+    return fail("photometric check: odd patch >= 3, min_ncc > -1, positive thresholds");
+  return plane_sweep.Check(message);
 }
 
 std::string StereoFillResult::BriefReport() const {
-  char buffer[200];
+  char buffer[300];
   std::snprintf(buffer, sizeof(buffer),
-                "stereo fill %s: %d of %d hole pixels filled (%.1f%%), stereo vs sensor median "
-                "error %.2f%%",
-                termination.c_str(), filled_pixels, hole_pixels,
+                "stereo fill (%s) %s: %d of %d hole pixels filled (%.1f%%), stereo vs sensor median "
+                "error %.2f%% (%.1f mm); rejected by ring %d, by %s %d",
+                method.c_str(), termination.c_str(), filled_pixels, hole_pixels,
                 hole_pixels ? 100.0 * filled_pixels / hole_pixels : 0.0,
-                100.0 * stereo_error_median);
+                100.0 * stereo_error_median, 1000.0 * stereo_error_median_m, rejected_by_ring,
+                third_view_used ? "third view" : "(no third view)", rejected_by_photometry);
   return buffer;
 }
 
 StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
                                    const Camera& camera, const SE3& key1_from_key2,
-                                   const StereoFillOptions& options) {
+                                   const StereoFillOptions& options, const ThirdView& third) {
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
   GF_CHECK(key1.color.type() == CV_8UC3 && key2.color.type() == CV_8UC3 &&
@@ -164,39 +242,73 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   result.fill_mask = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
   result.stereo_depth = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
   result.hole_pixels = cv::countNonZero(key1.hole_mask);
+  result.source = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
+  result.source.setTo(static_cast<uint8_t>(DepthSource::kSensor), key1.hole_mask == 0);
+  result.confidence = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
+  result.confidence.setTo(1.f, key1.hole_mask == 0);
 
   if (key1_from_key2.TranslationNorm() < options.min_baseline_m) {
     result.termination = "baseline too short";
     return result;
   }
-  // Epipole of camera 2 in image 1: inside the image means mostly forward motion.
-  const Eigen::Vector3d center2 = key1_from_key2.translation();
-  if (center2.z() > 0 && camera.InImage(camera.Project(center2))) {
+  cv::Mat& stereo = result.stereo_depth;
+  const bool forward =
+      EpipoleInsideImage(camera, key1_from_key2, options.epipole_margin_px) ||
+      EpipoleInsideImage(camera, key1_from_key2.Inverse(), options.epipole_margin_px);
+  if (forward && !options.plane_sweep_forward) {
     result.termination = "forward motion (epipole inside the image)";
     return result;
   }
-  // Stereo runs with the left camera of the pair first; when that is keyframe 2, its points are
-  // moved into keyframe 1 with the known pose.
-  SE3 key1_from_points;
-  std::vector<Eigen::Vector3d> points;
-  if (!StereoPointsFromLeft(key1.color, key2.color, camera, key1_from_key2.Inverse(), options,
-                            &points)) {
-    key1_from_points = key1_from_key2;
-    if (!StereoPointsFromLeft(key2.color, key1.color, camera, key1_from_key2, options, &points)) {
-      result.termination = "rectification failed";
+  if (forward) {
+    // Rectification degenerates: plane-sweep the holes and a validation ring around them, within
+    // the depth range the sensor measures in keyframe 1.
+    std::vector<float> measured;
+    for (int y = 0; y < key1.depth.rows; y += 4)
+      for (int x = 0; x < key1.depth.cols; x += 4)
+        if (key1.depth.at<float>(y, x) > 0) measured.push_back(key1.depth.at<float>(y, x));
+    if (measured.size() < 100) {
+      result.termination = "keyframe has almost no measured depth";
       return result;
     }
-  }
-  // Back into keyframe 1's image; the nearest surface wins.
-  cv::Mat& stereo = result.stereo_depth;
-  for (const Eigen::Vector3d& q : points) {
-    const Eigen::Vector3d p = key1_from_points * q;
-    if (p.z() < options.min_depth_m || p.z() > options.max_depth_m) continue;
-    const Eigen::Vector2d px = camera.ProjectDistorted(p);
-    const int x = static_cast<int>(std::lround(px.x())), y = static_cast<int>(std::lround(px.y()));
-    if (x < 0 || y < 0 || x >= stereo.cols || y >= stereo.rows) continue;
-    float& cell = stereo.at<float>(y, x);
-    if (cell == 0.f || p.z() < cell) cell = static_cast<float>(p.z());
+    std::sort(measured.begin(), measured.end());
+    const double near = std::max(options.min_depth_m, 0.8 * measured[measured.size() / 50]);
+    const double far =
+        std::min(options.max_depth_m, 1.25 * measured[measured.size() - 1 - measured.size() / 50]);
+    cv::Mat region;
+    const int k = 2 * options.ring_px + 1;
+    cv::dilate(key1.hole_mask != 0, region,
+               cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+    std::vector<SweepView> views{{&key2, key1_from_key2}};
+    if (third.frame != nullptr) views.push_back({third.frame, third.key1_from_key3});
+    const PlaneSweepResult sweep =
+        SweepDepth(key1, views, camera, region, near, far, options.plane_sweep);
+    stereo = sweep.depth;
+    result.method = "plane sweep";
+  } else {
+    // Stereo runs with the left camera of the pair first; when that is keyframe 2, its points are
+    // moved into keyframe 1 with the known pose.
+    SE3 key1_from_points;
+    std::vector<Eigen::Vector3d> points;
+    if (!StereoPointsFromLeft(key1.color, key2.color, camera, key1_from_key2.Inverse(), options,
+                              &points)) {
+      key1_from_points = key1_from_key2;
+      if (!StereoPointsFromLeft(key2.color, key1.color, camera, key1_from_key2, options,
+                                &points)) {
+        result.termination = "rectification failed";
+        return result;
+      }
+    }
+    // Back into keyframe 1's image; the nearest surface wins.
+    for (const Eigen::Vector3d& q : points) {
+      const Eigen::Vector3d p = key1_from_points * q;
+      if (p.z() < options.min_depth_m || p.z() > options.max_depth_m) continue;
+      const Eigen::Vector2d px = camera.ProjectDistorted(p);
+      const int x = static_cast<int>(std::lround(px.x())), y = static_cast<int>(std::lround(px.y()));
+      if (x < 0 || y < 0 || x >= stereo.cols || y >= stereo.rows) continue;
+      float& cell = stereo.at<float>(y, x);
+      if (cell == 0.f || p.z() < cell) cell = static_cast<float>(p.z());
+    }
+    result.method = "rectified SGBM";
   }
 
   // Block matching spreads a textured surface's depth over the textureless pixels next to it
@@ -216,39 +328,76 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   }
 
   // Validation against the sensor: over the image, and in a ring around each hole.
-  std::vector<float> all_errors;
+  std::vector<float> all_errors, all_errors_m;
   cv::Mat not_hole = key1.hole_mask == 0;
   cv::Mat distance, labels;
   cv::distanceTransform(not_hole, distance, labels, cv::DIST_L2, 3, cv::DIST_LABEL_CCOMP);
   double max_label = 0;
   cv::minMaxLoc(labels, nullptr, &max_label);
   std::vector<std::vector<float>> ring_errors(static_cast<size_t>(max_label) + 1);
+  std::vector<std::vector<float>> ring_ratios(ring_errors.size());  // sensor / stereo
   for (int y = 0; y < stereo.rows; ++y) {
     for (int x = 0; x < stereo.cols; ++x) {
       const float s = stereo.at<float>(y, x), k = key1.depth.at<float>(y, x);
       if (!(s > 0) || !(k > 0)) continue;
       const float e = std::abs(s - k) / k;
       all_errors.push_back(e);
-      if (distance.at<float>(y, x) <= options.ring_px)
+      all_errors_m.push_back(std::abs(s - k));
+      if (distance.at<float>(y, x) <= options.ring_px) {
         ring_errors[labels.at<int>(y, x)].push_back(e);
+        ring_ratios[labels.at<int>(y, x)].push_back(k / s);
+      }
     }
   }
   result.stereo_error_median = all_errors.empty() ? 1.0 : Median(all_errors);
+  result.stereo_error_median_m = all_errors_m.empty() ? 0.0 : Median(all_errors_m);
   if (all_errors.empty() || result.stereo_error_median > options.max_pair_error) {
     result.termination = "stereo disagrees with the sensor (pose or matching)";
     return result;
   }
+  // Per hole: the ring's median error decides; with ring_scale_correction the stereo depth is
+  // first scaled by the ring's median sensor/stereo ratio (a small pose error scales stereo depth
+  // locally), and the error left after that decides.
   std::vector<uint8_t> accept(ring_errors.size(), 0);
-  for (size_t l = 0; l < ring_errors.size(); ++l)
-    accept[l] = static_cast<int>(ring_errors[l].size()) >= options.min_ring_samples &&
-                Median(ring_errors[l]) <= options.max_ring_error;
+  std::vector<float> ring_median(ring_errors.size(), 1.f), ring_scale(ring_errors.size(), 1.f);
+  for (size_t l = 0; l < ring_errors.size(); ++l) {
+    if (static_cast<int>(ring_errors[l].size()) < options.min_ring_samples) continue;
+    if (options.ring_scale_correction) {
+      const float scale = Median(ring_ratios[l]);
+      std::vector<float> left;
+      for (float r : ring_ratios[l]) left.push_back(std::abs(r / scale - 1.f));
+      ring_median[l] = Median(left);
+      ring_scale[l] = scale;
+      accept[l] = ring_median[l] <= options.max_ring_error &&
+                  std::abs(scale - 1.f) <= options.max_ring_scale;
+    } else {
+      ring_median[l] = Median(ring_errors[l]);
+      accept[l] = ring_median[l] <= options.max_ring_error;
+    }
+  }
+  PhotometricCheck photometric(key1, third, camera, options);
+  result.third_view_used = photometric.active();
+  std::vector<float> filled_errors_m;
   for (int y = 0; y < stereo.rows; ++y) {
     for (int x = 0; x < stereo.cols; ++x) {
       if (key1.hole_mask.at<uint8_t>(y, x) == 0) continue;  // measured: never overwritten
-      const float s = stereo.at<float>(y, x);
-      if (!(s > 0) || !accept[labels.at<int>(y, x)]) continue;
+      if (!(stereo.at<float>(y, x) > 0)) continue;
+      const int label = labels.at<int>(y, x);
+      const float s = stereo.at<float>(y, x) * ring_scale[label];
+      if (!accept[label]) {
+        ++result.rejected_by_ring;
+        continue;
+      }
+      const double agreement = photometric.Agreement(x, y, s);
+      if (agreement <= 0) {
+        ++result.rejected_by_photometry;
+        continue;
+      }
       result.filled_depth.at<float>(y, x) = s;
       result.fill_mask.at<uint8_t>(y, x) = 255;
+      result.source.at<uint8_t>(y, x) = static_cast<uint8_t>(DepthSource::kStereo);
+      const double ring = ring_median[label] / options.max_ring_error;
+      result.confidence.at<float>(y, x) = static_cast<float>(std::exp(-ring * ring) * agreement);
       ++result.filled_pixels;
     }
   }

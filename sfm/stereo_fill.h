@@ -2,31 +2,42 @@
 // tracker knows (the heart of GlassFusion: glass, shiny and dark surfaces that the Kinect cannot
 // measure are still textured in colour).
 //
-// Steps: check the pair (baseline, epipole outside the image: forward motion gives no usable
-// stereo), rectify both colour images (cv::stereoRectify) with the pair's left camera first
+// Steps: check the pair (baseline; epipole inside the image, i.e. mostly forward motion, goes to
+// the plane sweep of sfm/plane_sweep.h over the holes instead, with the third view when given),
+// rectify both colour images (cv::stereoRectify) with the pair's left camera first
 // (a mostly vertical baseline is transposed into a horizontal one), compute disparity with
 // cv::StereoSGBM in both directions (the right view's by mirroring the images) and keep pixels
 // that agree (left-right check), convert to metric depth in the left camera, move it into
 // keyframe 1 with the known pose and project it into keyframe 1's image (z-buffer), then validate:
 // the stereo depth must agree with the Kinect on measured pixels around each hole, or that hole is
-// left empty. Only pixels the sensor left empty are filled; measured pixels are never changed.
+// left empty. Where a third keyframe sees the filled point, its colour there must match keyframe 1's
+// (normalised cross-correlation of small patches), unless the third keyframe's sensor shows the
+// point hidden behind a nearer surface. Only pixels the sensor left empty are filled; measured
+// pixels are never changed. Each filled pixel carries a confidence and a source tag.
 //
 // No threads, no I/O. Usage:
 //   gf::StereoFillResult r = gf::FillHolesByStereo(key1, key2, camera, key1_from_key2, {});
 //   if (r.success) depth = r.filled_depth;   // r.fill_mask says which pixels are new
+//   // with a third keyframe for the photometric check:
+//   r = gf::FillHolesByStereo(key1, key2, camera, key1_from_key2, {}, {&key3, key1_from_key3});
 #pragma once
 
+#include <cstdint>
 #include <opencv2/core.hpp>
 #include <string>
 
 #include "acquisition/camera.h"
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
+#include "sfm/plane_sweep.h"
 
 namespace gf {
 
 struct StereoFillOptions {
   double min_baseline_m = 0.04;       // shorter baselines give too little parallax, metres
+  double epipole_margin_px = 40;      // epipole this close to the image (or inside): forward motion
+  bool plane_sweep_forward = true;    // forward motion: plane sweep (else the pair is skipped)
+  PlaneSweepOptions plane_sweep;
   int num_disparities = 128;          // SGBM search range, pixels (multiple of 16)
   int block_size = 5;                 // SGBM block, pixels (odd)
   int uniqueness_ratio = 10;          // SGBM uniqueness, percent
@@ -38,28 +49,58 @@ struct StereoFillOptions {
   int ring_px = 6;               // validation ring around each hole, pixels
   int min_ring_samples = 15;     // holes with fewer stereo/Kinect pairs in the ring stay empty
   double max_ring_error = 0.03;  // median relative error allowed in the ring
-  double max_pair_error = 0.05;  // median relative error over the whole image: else reject
+  bool ring_scale_correction = true;  // scale each hole's stereo by its ring's sensor/stereo ratio
+  double max_ring_scale = 0.10;       // ... when that ratio is within 1 +- this
+  double max_pair_error = 0.08;  // median relative error over the whole image: else reject
   int edge_margin_px = 2;        // drop stereo depth this close to a depth discontinuity
   double edge_jump = 0.05;       // relative depth step that counts as a discontinuity
+  // Photometric check in a third keyframe (when one is given).
+  int photometric_patch_px = 7;   // patch side for the comparison, pixels (odd)
+  double min_ncc = 0.5;           // textured patches must correlate at least this much
+  double min_patch_std = 4.0;     // below this grey-level spread a patch counts as textureless ...
+  double max_mean_difference = 25.0;  // ... and then only the mean grey levels are compared
+  double occlusion_margin = 0.05;     // third view's sensor nearer by this (relative): hidden there
   bool Check(std::string* message = nullptr) const;
+};
+
+// Where a pixel's depth came from (the `source` field of map.ply and of StereoFillResult).
+enum class DepthSource : uint8_t { kNone = 0, kSensor = 1, kStereo = 2, kColmap = 3 };
+
+// Optional third keyframe for the photometric check.
+struct ThirdView {
+  const RgbdFrame* frame = nullptr;  // null: no check
+  SE3 key1_from_key3;
 };
 
 struct StereoFillResult {
   bool success = false;
   std::string termination;  // "ok" or why the pair was not used
+  std::string method;       // "rectified SGBM" or "plane sweep"
   cv::Mat stereo_depth;     // CV_32F metres in keyframe 1's image, 0 = none (all stereo)
   cv::Mat filled_depth;     // CV_32F: the sensor's depth plus the filled pixels
   cv::Mat fill_mask;        // CV_8U: 255 where a hole was filled
+  cv::Mat source;           // CV_8U: DepthSource per pixel of filled_depth
+  cv::Mat confidence;       // CV_32F in [0, 1]: 1 on sensor pixels, the fill's confidence on filled
+                            // ones (ring agreement times photometric agreement), 0 elsewhere
   int hole_pixels = 0;      // pixels the sensor left empty
   int filled_pixels = 0;
-  double stereo_error_median = 0;  // relative, stereo vs Kinect where both exist
+  int rejected_by_ring = 0;         // hole pixels with stereo depth whose hole failed the ring test
+  int rejected_by_photometry = 0;   // ... that the third view contradicted
+  bool third_view_used = false;
+  double stereo_error_median = 0;    // relative, stereo vs Kinect where both exist
+  double stereo_error_median_m = 0;  // the same in metres
   std::string BriefReport() const;
 };
+
+// True when the epipole of camera b in camera a's image (the direction of the baseline, forward or
+// backward) lies inside the image or within margin_px of it: rectification then degenerates and
+// block matching finds no usable disparity. Checks a's image only; call it both ways round.
+bool EpipoleInsideImage(const Camera& camera, const SE3& a_from_b, double margin_px);
 
 // key1/key2: colour (BGR) and metric depth with hole masks; key1_from_key2 maps points from
 // keyframe 2's camera into keyframe 1's. Both frames use `camera`.
 StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
                                    const Camera& camera, const SE3& key1_from_key2,
-                                   const StereoFillOptions& options);
+                                   const StereoFillOptions& options, const ThirdView& third = {});
 
 }  // namespace gf

@@ -105,10 +105,17 @@ TEST(FillHolesByStereo, RejectsShortBaselinesAndForwardMotion) {
   const SE3 short_step(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.01, 0, 0));
   EXPECT_EQ(FillHolesByStereo(f, f, cam, short_step, {}).termination, "baseline too short");
   const SE3 forward(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.0, 0.0, 0.2));
-  const StereoFillResult r = FillHolesByStereo(f, f, cam, forward, {});
+  StereoFillOptions no_sweep;
+  no_sweep.plane_sweep_forward = false;
+  const StereoFillResult r = FillHolesByStereo(f, f, cam, forward, no_sweep);
   EXPECT_FALSE(r.success);
   EXPECT_NE(r.termination.find("forward motion"), std::string::npos);
   EXPECT_EQ(cv::norm(r.filled_depth, f.depth, cv::NORM_INF), 0.0);
+  // With the plane sweep, a textureless pair yields no depth and changes nothing.
+  const StereoFillResult swept = FillHolesByStereo(f, f, cam, forward, {});
+  EXPECT_EQ(swept.method, "plane sweep");
+  EXPECT_EQ(swept.filled_pixels, 0);
+  EXPECT_EQ(cv::norm(swept.filled_depth, f.depth, cv::NORM_INF), 0.0);
 }
 
 // The same pair with the keyframes' roles swapped: keyframe 1 is now the right camera, so stereo

@@ -1,0 +1,92 @@
+// The asynchronous stereo-fill stage of `reconstruct`.
+//
+// The tracker hands every new keyframe to Offer(): keyframes go into a bounded queue; for live
+// input a keyframe that finds the queue full is dropped from the fill (and counted), so tracking
+// never waits on stereo; for recorded input Offer() waits for room (options.drop_when_busy). One worker thread pairs keyframes (KeyframePairScheduler), fills
+// each keyframe's holes (FillHolesByStereo, with the third view when the pair selection found one)
+// and writes, for every keyframe, in <out_dir>/keyframes/ (names in DESIGN.md):
+//   <ts>.hole_mask.png     8-bit HoleCode (0 valid, 1 no return, 2 out of range, 3 shadow)
+//   <ts>.depth_filled.png  16-bit millimetres: sensor depth plus filled pixels, 0 still empty
+//   <ts>.fill_overlay.png  colour image, filled pixels green (brighter = more confident),
+//                          holes still empty magenta
+// Each file is written atomically. Finish() drains the queue and joins the worker; Report() then
+// gives report.json's "fill" object.
+//
+// Thread-safety: Offer() from one producer thread; Finish() and Report() from the same thread.
+#pragma once
+
+#include <atomic>
+#include <exception>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "acquisition/camera.h"
+#include "acquisition/rgbd_frame.h"
+#include "acquisition/se3.h"
+#include "apps/bounded_queue.h"
+#include "sfm/keyframe_pairs.h"
+#include "sfm/stereo_fill.h"
+
+namespace gf {
+
+struct FillStageOptions {
+  PairSelectionOptions pairs;
+  StereoFillOptions stereo;
+  int queue_capacity = 16;  // keyframes waiting for the worker
+  // Live input: a keyframe arriving at a full queue is dropped from the fill (and counted), so
+  // tracking never waits. Recorded input (false): Offer() waits for room instead, so that every
+  // keyframe is filled; nothing is lost by waiting on a file.
+  bool drop_when_busy = true;
+  bool Check(std::string* message = nullptr) const;
+};
+
+// One keyframe's outcome, as report.json lists it.
+struct KeyframeFill {
+  std::string timestamp;
+  std::string partner;  // partner's timestamp, empty when none
+  std::string termination;
+  double baseline_m = 0;
+  int matches = 0;
+  bool third_view = false;
+  int hole_pixels = 0;
+  int filled_pixels = 0;
+  double stereo_error_median_m = 0;  // stereo vs sensor on pixels both have
+  double ms = 0;                     // pairing + stereo + validation, milliseconds
+};
+
+class FillStage {
+ public:
+  FillStage(const Camera& camera, const FillStageOptions& options, const std::string& out_dir);
+  ~FillStage();  // joins the worker (dropping what is queued) if Finish() was not called
+  FillStage(const FillStage&) = delete;
+  FillStage& operator=(const FillStage&) = delete;
+
+  // False when the keyframe was dropped (queue full and drop_when_busy, or the worker failed).
+  bool Offer(const RgbdFrame& frame, const SE3& world_from_camera);
+  // Processes what is queued, pairs the last keyframes, joins the worker. Rethrows a worker error
+  // (e.g. an output file that could not be written).
+  void Finish();
+  nlohmann::ordered_json Report() const;
+  const std::vector<KeyframeFill>& keyframes() const { return done_; }
+
+ private:
+  struct Offered {
+    RgbdFrame frame;
+    SE3 world_from_camera;
+  };
+  void Run();
+  void Process(const StereoJob& job);
+
+  Camera camera_;
+  FillStageOptions options_;
+  std::string keyframe_dir_;
+  BoundedQueue<Offered> queue_;
+  std::vector<KeyframeFill> done_;  // written by the worker, read after Finish()
+  int dropped_ = 0;
+  std::exception_ptr error_;
+  std::thread worker_;
+};
+
+}  // namespace gf

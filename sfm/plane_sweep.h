@@ -1,0 +1,61 @@
+// Plane-sweep stereo for the pixels of a keyframe that rectified stereo cannot serve: pairs whose
+// motion is mostly forward (the epipole inside the image), where cv::stereoRectify degenerates.
+//
+// Fronto-parallel planes of keyframe 1, evenly spaced in inverse depth, are swept through the
+// requested depth range; for each plane the other views are warped into keyframe 1 by the plane's
+// homography (on undistorted images) and compared with keyframe 1 by zero-mean normalised
+// cross-correlation over a window (box filters, so every plane costs a few image operations).
+// Each pixel keeps the plane with the best mean correlation over the views that see it, refined to
+// sub-plane precision by a parabola. A pixel gets a depth only when the correlation is high, the
+// minimum is distinct (the best plane beats every plane more than two steps away by a margin) and
+// the views give enough parallax there (a 3% change of depth moves the pixel by at least
+// min_parallax_px in some view: near the epipole forward motion gives none).
+//
+// No threads, no I/O. Usage:
+//   gf::PlaneSweepResult r = gf::SweepDepth(key1, {{&key2, key1_from_key2}}, camera, mask,
+//                                           0.5, 3.0, {});
+//   // r.depth: CV_32F metres in keyframe 1's (distorted) image, 0 where no depth was accepted
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "acquisition/camera.h"
+#include "acquisition/rgbd_frame.h"
+#include "acquisition/se3.h"
+
+namespace gf {
+
+struct PlaneSweepOptions {
+  int window_px = 9;             // correlation window side, pixels (odd)
+  int max_planes = 96;           // most planes swept
+  double max_step_px = 1.0;      // the plane spacing moves no pixel by more than this, pixels
+  double min_ncc = 0.8;          // best mean correlation needed
+  double min_ncc_margin = 0.05;  // best must beat every plane > 2 steps away by this much
+  double min_parallax_px = 0.6;  // a 3% depth change must move the pixel this much in a view
+  double min_texture = 3.0;      // grey-level standard deviation of keyframe 1's window
+  bool Check(std::string* message = nullptr) const;
+};
+
+struct SweepView {
+  const RgbdFrame* frame = nullptr;
+  SE3 key1_from_view;
+};
+
+struct PlaneSweepResult {
+  cv::Mat depth;  // CV_32F metres, keyframe 1's image; 0 = none
+  cv::Mat score;  // CV_32F best mean correlation where depth > 0
+  int planes = 0;
+  int requested_pixels = 0;
+  int accepted_pixels = 0;
+  std::string BriefReport() const;
+};
+
+// mask: CV_8U, non-zero where depth is wanted (keyframe 1's image). Depths in [min_depth_m,
+// max_depth_m]. Views must have BGR colour.
+PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>& views,
+                            const Camera& camera, const cv::Mat& mask, double min_depth_m,
+                            double max_depth_m, const PlaneSweepOptions& options);
+
+}  // namespace gf
