@@ -8,7 +8,7 @@ if(NOT EXISTS "${input}")
 endif()
 set(out "${CMAKE_CURRENT_BINARY_DIR}/cli_reconstruct_tmp")
 file(REMOVE_RECURSE "${out}")
-execute_process(COMMAND "${GLASSFUSION}" reconstruct "${input}" --out "${out}" --frames 0:40
+execute_process(COMMAND "${GLASSFUSION}" reconstruct "${input}" --out "${out}" --frames 0:40 --no-fill
                 RESULT_VARIABLE rc OUTPUT_VARIABLE stdout ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "reconstruct failed (${rc}): ${err}")

@@ -1,0 +1,79 @@
+# End-to-end stereo fill on real frames, scored by the independent tools in ../shared/tools:
+# punch-holes.py removes the depth of world-anchored textured patches from the first 40 frames of
+# the TUM head sequence (keeping it as truth), `glassfusion reconstruct` fills keyframe holes, and
+# fill-eval.py scores keyframes/<ts>.depth_filled.png against the removed depth. Also checks the
+# run folder's keyframe files and report.json's fill object.
+set(input "${DATASETS}/tum_fr1_xyz_head")
+get_filename_component(tools "${DATASETS}/../tools" ABSOLUTE)
+if(NOT EXISTS "${input}" OR NOT EXISTS "${tools}/punch-holes.py")
+  message("SKIPPED: ${input} or ${tools} not present")
+  return()
+endif()
+# Debian's python3 has numpy and OpenCV; a python3 earlier on PATH may not.
+find_program(PYTHON NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
+if(NOT PYTHON)
+  find_program(PYTHON NAMES python3)
+endif()
+set(work "${CMAKE_CURRENT_BINARY_DIR}/cli_fill_tmp")
+file(REMOVE_RECURSE "${work}")
+execute_process(COMMAND "${PYTHON}" "${tools}/punch-holes.py" "${input}" "${work}/punched" 0 40
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "punch-holes.py failed (${rc}): ${err}")
+endif()
+execute_process(COMMAND "${GLASSFUSION}" reconstruct "${work}/punched" --out "${work}/run"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "reconstruct failed (${rc}): ${err}")
+endif()
+file(READ "${work}/run/report.json" report)
+string(JSON keyframes GET "${report}" keyframes)
+string(JSON written GET "${report}" fill keyframes_filled)
+string(JSON holes GET "${report}" fill hole_pixels)
+string(JSON filled GET "${report}" fill filled_pixels)
+string(JSON fill_rate GET "${report}" fill fill_rate)
+string(JSON stereo_error GET "${report}" fill stereo_error_median_m)
+if(NOT written EQUAL keyframes OR holes LESS 1 OR filled LESS 1)
+  message(FATAL_ERROR "fill report: ${keyframes} keyframes, ${written} written, ${filled} of ${holes}")
+endif()
+file(GLOB masks "${work}/run/keyframes/*.hole_mask.png")
+file(GLOB depths "${work}/run/keyframes/*.depth_filled.png")
+file(GLOB overlays "${work}/run/keyframes/*.fill_overlay.png")
+list(LENGTH masks n_masks)
+list(LENGTH depths n_depths)
+list(LENGTH overlays n_overlays)
+if(NOT n_masks EQUAL keyframes OR NOT n_depths EQUAL keyframes OR NOT n_overlays EQUAL keyframes)
+  message(FATAL_ERROR "keyframes/: ${n_masks} masks, ${n_depths} depths, ${n_overlays} overlays for ${keyframes} keyframes")
+endif()
+# Measured pixels are never changed: every sensor pixel of the punched input is in depth_filled.
+execute_process(COMMAND "${PYTHON}" -c "
+import cv2, glob, os, sys
+bad = 0
+for p in glob.glob('${work}/run/keyframes/*.depth_filled.png'):
+    ts = os.path.basename(p)[:-len('.depth_filled.png')]
+    src = cv2.imread('${work}/punched/depth/' + ts + '.png', -1).astype(float) / 5.0
+    out = cv2.imread(p, -1).astype(float)
+    m = src > 0
+    bad += int((abs(out[m] - src[m]) > 0.6).sum())
+sys.exit(1 if bad else 0)"
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "depth_filled changed measured pixels: ${err}")
+endif()
+execute_process(COMMAND "${PYTHON}" "${tools}/fill-eval.py" "${work}/punched" "${work}/run"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE score ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "fill-eval.py failed (${rc}): ${err} ${score}")
+endif()
+string(REGEX MATCH "fill_rate=([0-9.]+) good_rate=([0-9.]+) median_rel_err=([0-9.]+) p90_rel_err=([0-9.]+)" _ "${score}")
+set(rate ${CMAKE_MATCH_1})
+set(good ${CMAKE_MATCH_2})
+set(median ${CMAKE_MATCH_3})
+set(p90 ${CMAKE_MATCH_4})
+# Bounds below today's figures (see the issue note); they guard against regressions, the goal
+# (good_rate >= 0.70, p90 <= 5%) is not met yet.
+if(rate LESS 0.05 OR good LESS 0.04 OR median GREATER 0.02 OR p90 GREATER 0.06)
+  message(FATAL_ERROR "fill on punched TUM frames regressed: ${score}")
+endif()
+file(REMOVE_RECURSE "${work}")
+message("fill ok: ${score}")
