@@ -159,9 +159,11 @@ void FillStage::Process(const StereoJob& job) {
   const fs::path base = fs::path(keyframe_dir_) / k.timestamp;
   WriteImage(base.string() + ".hole_mask.png", key1.hole_mask);
   WriteImage(base.string() + ".depth_filled.png", ToMillimetres(filled_depth));
-  if (!key1.color.empty())
+  if (!key1.color.empty()) {
     WriteImage(base.string() + ".fill_overlay.png",
                Overlay(key1.color, filled_depth, fill_mask, confidence));
+    WriteImage(base.string() + ".color.png", key1.color);  // for colmap-export
+  }
   done_.push_back(k);
 }
 

@@ -9,6 +9,7 @@
 //   <ts>.depth_filled.png  16-bit millimetres: sensor depth plus filled pixels, 0 still empty
 //   <ts>.fill_overlay.png  colour image, filled pixels green (brighter = more confident),
 //                          holes still empty magenta
+//   <ts>.color.png         the keyframe's colour image (lossless; colmap-export uses it)
 // Each file is written atomically. Finish() drains the queue and joins the worker; Report() then
 // gives report.json's "fill" object.
 //

@@ -259,7 +259,7 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     result.termination = "forward motion (epipole inside the image)";
     return result;
   }
-  if (forward) {
+  if (forward || options.plane_sweep_always) {
     // Rectification degenerates: plane-sweep the holes and a validation ring around them, within
     // the depth range the sensor measures in keyframe 1.
     std::vector<float> measured;

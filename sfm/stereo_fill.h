@@ -37,6 +37,7 @@ struct StereoFillOptions {
   double min_baseline_m = 0.04;       // shorter baselines give too little parallax, metres
   double epipole_margin_px = 40;      // epipole this close to the image (or inside): forward motion
   bool plane_sweep_forward = true;    // forward motion: plane sweep (else the pair is skipped)
+  bool plane_sweep_always = false;    // plane sweep for sideways pairs too (instead of SGBM)
   PlaneSweepOptions plane_sweep;
   int num_disparities = 128;          // SGBM search range, pixels (multiple of 16)
   int block_size = 5;                 // SGBM block, pixels (odd)
