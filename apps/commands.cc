@@ -9,6 +9,7 @@
 #include "apps/demo.h"
 #include "apps/info.h"
 #include "apps/progress.h"
+#include "apps/colmap.h"
 #include "apps/reconstruct.h"
 #include "datasets/synth.h"
 
@@ -175,6 +176,38 @@ void RegisterCommands(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--camera", options->camera_file, "camera.json to use instead of the device's");
     cmd->callback([options] { RunCapture(*options); });
+  }
+  {
+    auto run_dir = std::make_shared<std::string>();
+    auto workspace = std::make_shared<std::string>();
+    CLI::App* cmd = app.add_subcommand(
+        "colmap-export",
+        "write a COLMAP workspace (images/, sparse/ text model with the tracked keyframe poses) "
+        "from a reconstruct run");
+    cmd->add_option("RUN_DIR", *run_dir, "folder written by `glassfusion reconstruct`")
+        ->required();
+    cmd->add_option("--out", *workspace, "workspace folder to create")->required();
+    cmd->callback([run_dir, workspace] {
+      const ColmapExportSummary s = RunColmapExport(*run_dir, *workspace);
+      std::cout << "colmap-export: " << s.BriefReport() << " in " << *workspace << std::endl;
+    });
+  }
+  {
+    auto workspace = std::make_shared<std::string>();
+    auto run_dir = std::make_shared<std::string>();
+    auto options = std::make_shared<ColmapImportOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "colmap-import",
+        "read COLMAP's refined poses (text model) and patch_match_stereo depth maps back into a "
+        "run: RUN_DIR/trajectory_colmap.txt, holes filled in keyframes/, colmap_import.json");
+    cmd->add_option("WORKSPACE", *workspace, "COLMAP workspace made by colmap-export")->required();
+    cmd->add_option("--into", *run_dir, "the reconstruct run folder")->required();
+    cmd->add_option("--model", options->model_dir,
+                    "text model with refined poses (default WORKSPACE/refined)");
+    cmd->callback([workspace, run_dir, options] {
+      const ColmapImportSummary s = RunColmapImport(*workspace, *run_dir, *options);
+      std::cout << "colmap-import: " << s.BriefReport() << std::endl;
+    });
   }
   {
     auto options = std::make_shared<DemoOptions>();

@@ -1,0 +1,245 @@
+#include "apps/colmap.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "acquisition/camera.h"
+#include "acquisition/errors.h"
+#include "acquisition/file_util.h"
+#include "acquisition/image_io.h"
+#include "acquisition/trajectory.h"
+#include "sfm/colmap_io.h"
+
+namespace fs = std::filesystem;
+
+namespace gf {
+namespace {
+
+constexpr const char* kColorSuffix = ".color.png";
+
+// Keyframe timestamps of a run (from keyframes/<ts>.color.png), in time order.
+std::vector<std::string> RunKeyframes(const std::string& run_dir) {
+  const fs::path dir = fs::path(run_dir) / "keyframes";
+  if (!IsDirectory(dir.string()))
+    throw InputError(dir.string(), "no keyframes folder (run `glassfusion reconstruct` first)");
+  std::vector<std::string> stamps;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    const size_t n = std::strlen(kColorSuffix);
+    if (name.size() > n && name.compare(name.size() - n, n, kColorSuffix) == 0)
+      stamps.push_back(name.substr(0, name.size() - n));
+  }
+  if (stamps.empty()) throw InputError(dir.string(), "no <ts>.color.png keyframe images");
+  std::sort(stamps.begin(), stamps.end(), [](const std::string& a, const std::string& b) {
+    return std::stod(a) < std::stod(b);
+  });
+  return stamps;
+}
+
+// "000007_1305031102.160407.png" -> "1305031102.160407".
+std::string StampOfName(const std::string& name) {
+  const size_t underscore = name.find('_');
+  const size_t dot = name.rfind(".png");
+  if (underscore == std::string::npos || dot == std::string::npos || dot <= underscore)
+    return "";
+  return name.substr(underscore + 1, dot - underscore - 1);
+}
+
+double Median(std::vector<float> v) {
+  if (v.empty()) return 1.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+std::string ColmapExportSummary::BriefReport() const {
+  return std::to_string(images) + " keyframe images with tracked poses";
+}
+
+ColmapExportSummary RunColmapExport(const std::string& run_dir, const std::string& workspace) {
+  const CameraFile camera = LoadCameraFile((fs::path(run_dir) / "camera.json").string());
+  const Trajectory trajectory = ReadTumTrajectory((fs::path(run_dir) / "trajectory.txt").string());
+  std::map<std::string, SE3> poses;
+  for (const StampedPose& p : trajectory) poses[p.timestamp_text] = p.world_from_camera;
+  const std::vector<std::string> stamps = RunKeyframes(run_dir);
+
+  const std::string staging = StageFolder(workspace);
+  fs::create_directories(fs::path(staging) / "images");
+  std::vector<ColmapImage> images;
+  for (const std::string& ts : stamps) {
+    const auto pose = poses.find(ts);
+    if (pose == poses.end())
+      throw InputError((fs::path(run_dir) / "trajectory.txt").string(),
+                       "no pose for keyframe " + ts);
+    ColmapImage image;
+    image.id = static_cast<int>(images.size()) + 1;
+    char prefix[16];
+    std::snprintf(prefix, sizeof(prefix), "%06d_", image.id);
+    image.name = prefix + ts + ".png";
+    image.world_from_camera = pose->second;
+    fs::copy_file(fs::path(run_dir) / "keyframes" / (ts + kColorSuffix),
+                  fs::path(staging) / "images" / image.name);
+    images.push_back(image);
+  }
+  WriteColmapTextModel((fs::path(staging) / "sparse").string(), camera.camera, images);
+  PublishFolder(staging, workspace);
+  ColmapExportSummary summary;
+  summary.images = static_cast<int>(images.size());
+  return summary;
+}
+
+bool ColmapImportOptions::Check(std::string* message) const {
+  if (!(max_sensor_error > 0) || min_sensor_samples < 1 || !(min_depth_m > 0) ||
+      !(max_depth_m > min_depth_m)) {
+    if (message) *message = "colmap-import: positive thresholds, min_depth < max_depth";
+    return false;
+  }
+  return true;
+}
+
+std::string ColmapImportSummary::BriefReport() const {
+  char buffer[200];
+  std::snprintf(buffer, sizeof(buffer),
+                "%d refined keyframe poses; %d depth maps, %d agreeing with the sensor, %ld hole "
+                "pixels filled from them",
+                poses, depth_maps, depth_maps_used, filled_pixels);
+  return buffer;
+}
+
+ColmapImportSummary RunColmapImport(const std::string& workspace, const std::string& run_dir,
+                                    const ColmapImportOptions& options) {
+  std::string problem;
+  if (!options.Check(&problem)) throw InputError(workspace, problem);
+  if (!IsDirectory(workspace)) throw InputError(workspace, "no such COLMAP workspace");
+  const CameraFile run_camera = LoadCameraFile((fs::path(run_dir) / "camera.json").string());
+  const Camera& camera = run_camera.camera;
+  ColmapImportSummary summary;
+  nlohmann::ordered_json report;
+
+  // Refined poses.
+  const std::string model_dir =
+      options.model_dir.empty() ? (fs::path(workspace) / "refined").string() : options.model_dir;
+  const std::string images_txt = (fs::path(model_dir) / "images.txt").string();
+  if (!options.model_dir.empty() && !IsRegularFile(images_txt))
+    throw InputError(images_txt, "no text model (convert with colmap model_converter "
+                                 "--output_type TXT)");
+  if (IsRegularFile(images_txt)) {
+    std::vector<ColmapImage> images = ReadColmapImages(images_txt);
+    Trajectory refined;
+    for (const ColmapImage& image : images) {
+      const std::string ts = StampOfName(image.name);
+      if (ts.empty()) throw InputError(images_txt, "image " + image.name + " is not from colmap-export");
+      refined.push_back({std::stod(ts), ts, image.world_from_camera});
+    }
+    std::sort(refined.begin(), refined.end(),
+              [](const StampedPose& a, const StampedPose& b) { return a.timestamp < b.timestamp; });
+    WriteTumTrajectory((fs::path(run_dir) / "trajectory_colmap.txt").string(), refined);
+    summary.poses = static_cast<int>(refined.size());
+    report["model"] = model_dir;
+  }
+
+  // Depth maps as a fill source.
+  fs::path dense;
+  for (const fs::path d : {fs::path(workspace), fs::path(workspace) / "dense"})
+    if (IsDirectory((d / "stereo" / "depth_maps").string())) {
+      dense = d;
+      break;
+    }
+  std::optional<Camera> dense_camera;
+  if (!dense.empty() && IsRegularFile((dense / "sparse" / "cameras.txt").string())) {
+    const auto cameras = ReadColmapCameras((dense / "sparse" / "cameras.txt").string());
+    if (!cameras.empty()) dense_camera = cameras.begin()->second;
+  }
+  nlohmann::ordered_json maps = nlohmann::ordered_json::array();
+  const fs::path images_dir = fs::path(workspace) / "images";
+  if (!dense.empty() && IsDirectory(images_dir.string())) {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(images_dir))
+      names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    for (const std::string& name : names) {
+      fs::path map_path;
+      for (const char* kind : {".geometric.bin", ".photometric.bin"}) {
+        const fs::path p = dense / "stereo" / "depth_maps" / (name + kind);
+        if (IsRegularFile(p.string())) {
+          map_path = p;
+          break;
+        }
+      }
+      const std::string ts = StampOfName(name);
+      if (map_path.empty() || ts.empty()) continue;
+      ++summary.depth_maps;
+      const cv::Mat map = ReadColmapDepthMap(map_path.string());
+      const Camera grid = dense_camera ? *dense_camera : camera;
+      if (map.cols != grid.width || map.rows != grid.height)
+        throw InputError(map_path.string(), "size differs from the workspace camera");
+      const fs::path filled_path = fs::path(run_dir) / "keyframes" / (ts + ".depth_filled.png");
+      const fs::path mask_path = fs::path(run_dir) / "keyframes" / (ts + ".hole_mask.png");
+      cv::Mat filled = ReadDepthImage(filled_path.string());
+      const cv::Mat holes = cv::imread(mask_path.string(), cv::IMREAD_UNCHANGED);
+      if (holes.type() != CV_8UC1 || holes.size() != filled.size())
+        throw InputError(mask_path.string(), "missing, or not an 8-bit mask of the depth's size");
+      // Where keyframe pixel (x, y) lands in the depth map's grid.
+      auto lookup = [&](int x, int y) -> float {
+        int u = x, v = y;
+        if (dense_camera) {
+          const Eigen::Vector2d n =
+              camera.Undistort({(x - camera.cx) / camera.fx, (y - camera.cy) / camera.fy});
+          u = static_cast<int>(std::lround(grid.fx * n.x() + grid.cx));
+          v = static_cast<int>(std::lround(grid.fy * n.y() + grid.cy));
+          if (u < 0 || v < 0 || u >= grid.width || v >= grid.height) return 0.f;
+        }
+        const float z = map.at<float>(v, u);
+        return z >= options.min_depth_m && z <= options.max_depth_m ? z : 0.f;
+      };
+      std::vector<float> errors;
+      for (int y = 0; y < filled.rows; ++y)
+        for (int x = 0; x < filled.cols; ++x) {
+          if (holes.at<uint8_t>(y, x) != 0 || filled.at<uint16_t>(y, x) == 0) continue;
+          const float z = lookup(x, y), sensor = filled.at<uint16_t>(y, x) / 1000.f;
+          if (z > 0) errors.push_back(std::abs(z - sensor) / sensor);
+        }
+      const double error = Median(errors);
+      const bool agrees = static_cast<int>(errors.size()) >= options.min_sensor_samples &&
+                          error <= options.max_sensor_error;
+      long added = 0;
+      if (agrees) {
+        for (int y = 0; y < filled.rows; ++y)
+          for (int x = 0; x < filled.cols; ++x) {
+            if (holes.at<uint8_t>(y, x) == 0 || filled.at<uint16_t>(y, x) != 0) continue;
+            const float z = lookup(x, y);
+            if (z <= 0) continue;
+            filled.at<uint16_t>(y, x) = static_cast<uint16_t>(std::min(65535.f, z * 1000.f + 0.5f));
+            ++added;
+          }
+        WriteImage(filled_path.string(), filled);
+        ++summary.depth_maps_used;
+        summary.filled_pixels += added;
+      }
+      maps.push_back({{"timestamp", ts},
+                      {"depth_map", map_path.string()},
+                      {"sensor_samples", errors.size()},
+                      {"sensor_error_median", errors.empty() ? nlohmann::ordered_json()
+                                                             : nlohmann::ordered_json(error)},
+                      {"used", agrees},
+                      {"filled_pixels", added}});
+      spdlog::debug("colmap depth map {}: sensor error {:.2f}% over {} px, {} filled", name,
+                    100 * error, errors.size(), added);
+    }
+  }
+  report["poses"] = summary.poses;
+  report["depth_maps"] = maps;
+  report["filled_pixels"] = summary.filled_pixels;
+  WriteTextFileAtomically((fs::path(run_dir) / "colmap_import.json").string(),
+                          report.dump(2) + "\n");
+  return summary;
+}
+
+}  // namespace gf
