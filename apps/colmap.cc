@@ -36,9 +36,8 @@ std::vector<std::string> RunKeyframes(const std::string& run_dir) {
       stamps.push_back(name.substr(0, name.size() - n));
   }
   if (stamps.empty()) throw InputError(dir.string(), "no <ts>.color.png keyframe images");
-  std::sort(stamps.begin(), stamps.end(), [](const std::string& a, const std::string& b) {
-    return std::stod(a) < std::stod(b);
-  });
+  std::sort(stamps.begin(), stamps.end(),
+            [](const std::string& a, const std::string& b) { return std::stod(a) < std::stod(b); });
   return stamps;
 }
 
@@ -46,8 +45,7 @@ std::vector<std::string> RunKeyframes(const std::string& run_dir) {
 std::string StampOfName(const std::string& name) {
   const size_t underscore = name.find('_');
   const size_t dot = name.rfind(".png");
-  if (underscore == std::string::npos || dot == std::string::npos || dot <= underscore)
-    return "";
+  if (underscore == std::string::npos || dot == std::string::npos || dot <= underscore) return "";
   return name.substr(underscore + 1, dot - underscore - 1);
 }
 
@@ -128,14 +126,16 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
       options.model_dir.empty() ? (fs::path(workspace) / "refined").string() : options.model_dir;
   const std::string images_txt = (fs::path(model_dir) / "images.txt").string();
   if (!options.model_dir.empty() && !IsRegularFile(images_txt))
-    throw InputError(images_txt, "no text model (convert with colmap model_converter "
-                                 "--output_type TXT)");
+    throw InputError(images_txt,
+                     "no text model (convert with colmap model_converter "
+                     "--output_type TXT)");
   if (IsRegularFile(images_txt)) {
     std::vector<ColmapImage> images = ReadColmapImages(images_txt);
     Trajectory refined;
     for (const ColmapImage& image : images) {
       const std::string ts = StampOfName(image.name);
-      if (ts.empty()) throw InputError(images_txt, "image " + image.name + " is not from colmap-export");
+      if (ts.empty())
+        throw InputError(images_txt, "image " + image.name + " is not from colmap-export");
       refined.push_back({std::stod(ts), ts, image.world_from_camera});
     }
     std::sort(refined.begin(), refined.end(),
@@ -147,7 +147,7 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
 
   // Depth maps as a fill source.
   fs::path dense;
-  for (const fs::path d : {fs::path(workspace), fs::path(workspace) / "dense"})
+  for (const fs::path& d : {fs::path(workspace), fs::path(workspace) / "dense"})
     if (IsDirectory((d / "stereo" / "depth_maps").string())) {
       dense = d;
       break;
@@ -226,8 +226,8 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
       maps.push_back({{"timestamp", ts},
                       {"depth_map", map_path.string()},
                       {"sensor_samples", errors.size()},
-                      {"sensor_error_median", errors.empty() ? nlohmann::ordered_json()
-                                                             : nlohmann::ordered_json(error)},
+                      {"sensor_error_median",
+                       errors.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(error)},
                       {"used", agrees},
                       {"filled_pixels", added}});
       spdlog::debug("colmap depth map {}: sensor error {:.2f}% over {} px, {} filled", name,

@@ -14,8 +14,8 @@
 //    <image>.geometric.bin preferred over .photometric.bin, on the pixel grid of the dense
 //    workspace's sparse/cameras.txt when there is one): an additional fill source for the holes
 //    the stereo fill left empty in keyframes/<ts>.depth_filled.png. A map is used only where it
-//    agrees with the sensor on measured pixels (median relative error <= max_sensor_error); measured
-//    pixels are never changed.
+//    agrees with the sensor on measured pixels (median relative error <= max_sensor_error);
+//    measured pixels are never changed.
 // A summary goes to RUN_DIR/colmap_import.json.
 #pragma once
 

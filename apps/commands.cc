@@ -6,10 +6,10 @@
 #include "acquisition/trajectory_metrics.h"
 #include "apps/bench.h"
 #include "apps/capture.h"
+#include "apps/colmap.h"
 #include "apps/demo.h"
 #include "apps/info.h"
 #include "apps/progress.h"
-#include "apps/colmap.h"
 #include "apps/reconstruct.h"
 #include "datasets/synth.h"
 
@@ -184,8 +184,7 @@ void RegisterCommands(CLI::App& app) {
         "colmap-export",
         "write a COLMAP workspace (images/, sparse/ text model with the tracked keyframe poses) "
         "from a reconstruct run");
-    cmd->add_option("RUN_DIR", *run_dir, "folder written by `glassfusion reconstruct`")
-        ->required();
+    cmd->add_option("RUN_DIR", *run_dir, "folder written by `glassfusion reconstruct`")->required();
     cmd->add_option("--out", *workspace, "workspace folder to create")->required();
     cmd->callback([run_dir, workspace] {
       const ColmapExportSummary s = RunColmapExport(*run_dir, *workspace);

@@ -155,7 +155,8 @@ void FillStage::Process(const StereoJob& job) {
     k.termination = job.choice.reason;
     spdlog::debug("fill {}: {}", k.timestamp, job.choice.BriefReport());
   }
-  k.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  k.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const fs::path base = fs::path(keyframe_dir_) / k.timestamp;
   WriteImage(base.string() + ".hole_mask.png", key1.hole_mask);
   WriteImage(base.string() + ".depth_filled.png", ToMillimetres(filled_depth));
@@ -181,7 +182,8 @@ nlohmann::ordered_json FillStage::Report() const {
       if (k.filled_pixels > 0) errors.push_back(k.stereo_error_median_m);
     }
     list.push_back({{"timestamp", k.timestamp},
-                    {"partner", k.partner.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(k.partner)},
+                    {"partner", k.partner.empty() ? nlohmann::ordered_json()
+                                                  : nlohmann::ordered_json(k.partner)},
                     {"baseline_m", k.baseline_m},
                     {"matches", k.matches},
                     {"third_view", k.third_view},
@@ -193,16 +195,19 @@ nlohmann::ordered_json FillStage::Report() const {
                     {"termination", k.termination}});
   }
   std::sort(ms.begin(), ms.end());
-  return {{"hole_pixels", holes},
-          {"filled_pixels", filled},
-          {"fill_rate", holes ? double(filled) / holes : 0.0},
-          {"stereo_error_median_m", errors.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(Median(errors))},
-          {"keyframes_filled", static_cast<int>(done_.size())},
-          {"keyframes_paired", paired},
-          {"keyframes_dropped", dropped_},
-          {"pair_median_ms", ms.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(ms[ms.size() / 2])},
-          {"pair_max_ms", ms.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(ms.back())},
-          {"per_keyframe", list}};
+  return {
+      {"hole_pixels", holes},
+      {"filled_pixels", filled},
+      {"fill_rate", holes ? double(filled) / holes : 0.0},
+      {"stereo_error_median_m",
+       errors.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(Median(errors))},
+      {"keyframes_filled", static_cast<int>(done_.size())},
+      {"keyframes_paired", paired},
+      {"keyframes_dropped", dropped_},
+      {"pair_median_ms",
+       ms.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(ms[ms.size() / 2])},
+      {"pair_max_ms", ms.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(ms.back())},
+      {"per_keyframe", list}};
 }
 
 }  // namespace gf

@@ -2,9 +2,10 @@
 //
 // The tracker hands every new keyframe to Offer(): keyframes go into a bounded queue; for live
 // input a keyframe that finds the queue full is dropped from the fill (and counted), so tracking
-// never waits on stereo; for recorded input Offer() waits for room (options.drop_when_busy). One worker thread pairs keyframes (KeyframePairScheduler), fills
-// each keyframe's holes (FillHolesByStereo, with the third view when the pair selection found one)
-// and writes, for every keyframe, in <out_dir>/keyframes/ (names in DESIGN.md):
+// never waits on stereo; for recorded input Offer() waits for room (options.drop_when_busy). One
+// worker thread pairs keyframes (KeyframePairScheduler), fills each keyframe's holes
+// (FillHolesByStereo, with the third view when the pair selection found one) and writes, for every
+// keyframe, in <out_dir>/keyframes/ (names in DESIGN.md):
 //   <ts>.hole_mask.png     8-bit HoleCode (0 valid, 1 no return, 2 out of range, 3 shadow)
 //   <ts>.depth_filled.png  16-bit millimetres: sensor depth plus filled pixels, 0 still empty
 //   <ts>.fill_overlay.png  colour image, filled pixels green (brighter = more confident),

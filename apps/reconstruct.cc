@@ -52,8 +52,7 @@ bool ReconstructOptions::Check(std::string* message) const {
     if (message) *message = "need 0 <= A < B in --frames A:B";
     return false;
   }
-  return source.Check(message) && tracker.Check(message) &&
-         (!fill || fill_options.Check(message));
+  return source.Check(message) && tracker.Check(message) && (!fill || fill_options.Check(message));
 }
 
 std::string ReconstructSummary::BriefReport() const {
@@ -141,7 +140,9 @@ ReconstructSummary RunReconstruct(const ReconstructOptions& options) {
                       item.frame.timestamp_text, r.BriefReport());
       }
       if (fill && r.new_keyframe && r.status != TrackingStatus::kLost) {
-        if (item.frame.color.empty()) throw InputError(item.frame.depth_path.empty() ? options.input : item.frame.depth_path, "the stereo fill needs colour images (or --no-fill)");
+        if (item.frame.color.empty())
+          throw InputError(item.frame.depth_path.empty() ? options.input : item.frame.depth_path,
+                           "the stereo fill needs colour images (or --no-fill)");
         fill->Offer(item.frame, r.world_from_camera);
       }
       trajectory.push_back({item.frame.timestamp, item.frame.timestamp_text, r.world_from_camera});
@@ -201,7 +202,7 @@ ReconstructSummary RunReconstruct(const ReconstructOptions& options) {
   report["stages"] = {{"read", StageStats(read_ms)}, {"track", StageStats(track_ms)}};
   report["keyframes"] = summary.keyframes;
   report["tracking"] = {{"lost_frames", summary.lost}};
-  report["loops"] = nullptr;    // loop closure: not built yet
+  report["loops"] = nullptr;  // loop closure: not built yet
   report["fill"] = fill ? fill->Report() : nlohmann::ordered_json();
   if (fill) {
     summary.hole_pixels = report["fill"]["hole_pixels"];

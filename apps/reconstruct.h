@@ -37,7 +37,7 @@ struct ReconstructSummary {
   int frames = 0;
   int lost = 0;
   int keyframes = 0;
-  long hole_pixels = 0;    // in keyframes handed to the fill
+  long hole_pixels = 0;  // in keyframes handed to the fill
   long filled_pixels = 0;
   double seconds = 0;
   double fps = 0;

@@ -81,7 +81,8 @@ std::map<int, Camera> ReadColmapCameras(const std::string& path) {
     for (double v; in >> v;) p.push_back(v);
     const std::string where = path + ":" + std::to_string(number);
     auto need = [&](size_t n) {
-      if (p.size() < n) throw InputError(where, model + " needs " + std::to_string(n) + " parameters");
+      if (p.size() < n)
+        throw InputError(where, model + " needs " + std::to_string(n) + " parameters");
     };
     if (!in.eof() || id <= 0) throw InputError(where, "malformed camera line");
     if (model == "SIMPLE_PINHOLE") {

@@ -46,7 +46,8 @@ bool PhotometricRefine(const RgbdFrame& key1, const RgbdFrame& key2, const Camer
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) init.at<double>(i, j) = m(i, j);
   // compute() returns dst_from_src for (src = key2, dst = key1).
-  if (!odometry->compute(gray2, depth2, cv::Mat(), gray1, depth1, cv::Mat(), rt, init)) return false;
+  if (!odometry->compute(gray2, depth2, cv::Mat(), gray1, depth1, cv::Mat(), rt, init))
+    return false;
   Eigen::Matrix4d out;
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) out(i, j) = rt.at<double>(i, j);
@@ -97,8 +98,8 @@ PoseRefinement RefinePairPose(const StereoKeyframe& key1, const StereoKeyframe& 
   std::vector<cv::Point3f> object;
   std::vector<cv::Point2f> image;
   if (!key1.keypoints.empty() && !key2.keypoints.empty()) {
-    for (const cv::DMatch& m :
-         MatchDescriptors(key2.keypoints, key2.descriptors, key1.keypoints, key1.descriptors, match)) {
+    for (const cv::DMatch& m : MatchDescriptors(key2.keypoints, key2.descriptors, key1.keypoints,
+                                                key1.descriptors, match)) {
       const Eigen::Vector3d& p = key2.points[m.queryIdx];
       if (std::isnan(p.z())) continue;
       object.emplace_back(p.x(), p.y(), p.z());
@@ -185,7 +186,8 @@ std::shared_ptr<const StereoKeyframe> MakeStereoKeyframe(int id, const RgbdFrame
   k->keypoints = std::move(f.keypoints);
   k->descriptors = f.descriptors;
   for (const cv::KeyPoint& kp : k->keypoints) {
-    const int u = static_cast<int>(std::lround(kp.pt.x)), v = static_cast<int>(std::lround(kp.pt.y));
+    const int u = static_cast<int>(std::lround(kp.pt.x)),
+              v = static_cast<int>(std::lround(kp.pt.y));
     const float z = (u >= 0 && v >= 0 && u < frame.depth.cols && v < frame.depth.rows)
                         ? frame.depth.at<float>(v, u)
                         : 0.f;
@@ -233,12 +235,10 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
   int too_short = 0, too_long = 0, too_rotated = 0, forward = 0;
   for (size_t i = 0; i < candidates.size(); ++i) {
     const SE3 rel = key1.world_from_camera.Inverse() * candidates[i]->world_from_camera;
-    const Geometry g{static_cast<int>(i), rel.TranslationNorm(),
-                     rel.RotationAngle() * kDegPerRad};
+    const Geometry g{static_cast<int>(i), rel.TranslationNorm(), rel.RotationAngle() * kDegPerRad};
     // Parallax comes from the motion across key1's optical axis, or from all of it when forward
     // pairs go to the plane sweep.
-    const double lateral =
-        options.allow_forward ? g.baseline : rel.translation().head<2>().norm();
+    const double lateral = options.allow_forward ? g.baseline : rel.translation().head<2>().norm();
     if (g.baseline < options.min_baseline_m ||
         f * lateral / median_depth < options.min_median_disparity_px) {
       ++too_short;
@@ -266,9 +266,9 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
   features_only.photometric = false;  // dense alignment only for the chosen views, below
   for (const Geometry& g : in_range) {
     if (choice.evaluated >= options.max_evaluations) break;
-    const PoseRefinement pose = RefinePairPose(key1, *candidates[g.index], camera,
-                                               key1_from_world * candidates[g.index]->world_from_camera,
-                                               options.match, features_only);
+    const PoseRefinement pose = RefinePairPose(
+        key1, *candidates[g.index], camera,
+        key1_from_world * candidates[g.index]->world_from_camera, options.match, features_only);
     ++choice.evaluated;
     if (!pose.success || pose.inliers < options.min_matches) {
       fewest_short = std::max(fewest_short, pose.inliers);
@@ -289,13 +289,13 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
   }
   if (options.refine.photometric) {
     if (choice.found)
-      choice.partner_pose = RefinePairPose(key1, *candidates[choice.partner], camera,
-                                           choice.partner_pose.key1_from_key2, options.match,
-                                           options.refine);
+      choice.partner_pose =
+          RefinePairPose(key1, *candidates[choice.partner], camera,
+                         choice.partner_pose.key1_from_key2, options.match, options.refine);
     if (choice.third >= 0)
-      choice.third_pose = RefinePairPose(key1, *candidates[choice.third], camera,
-                                         choice.third_pose.key1_from_key2, options.match,
-                                         options.refine);
+      choice.third_pose =
+          RefinePairPose(key1, *candidates[choice.third], camera, choice.third_pose.key1_from_key2,
+                         options.match, options.refine);
   }
   if (!choice.found) {
     char buffer[200];
@@ -345,7 +345,8 @@ std::vector<StereoJob> KeyframePairScheduler::Add(const RgbdFrame& frame,
     --pending_;
   }
   // Keep `window` paired keyframes before the pending ones.
-  while (keyframes_.size() > pending_ + static_cast<size_t>(options_.window)) keyframes_.pop_front();
+  while (keyframes_.size() > pending_ + static_cast<size_t>(options_.window))
+    keyframes_.pop_front();
   return jobs;
 }
 

@@ -2,9 +2,9 @@
 //
 // For keyframe I1 the partner I2 is the keyframe as far from it as possible (longest baseline,
 // most parallax) that still shares at least `min_matches` SURF matches with I1 consistent with the
-// pair's relative pose refined from those matches (RefinePairPose), and only when the parallax suits
-// I1's depth range: the disparity of I1's median depth at least min_median_disparity_px, that of its
-// near depth (5th percentile) at most max_near_disparity_px (the stereo search range), the
+// pair's relative pose refined from those matches (RefinePairPose), and only when the parallax
+// suits I1's depth range: the disparity of I1's median depth at least min_median_disparity_px, that
+// of its near depth (5th percentile) at most max_near_disparity_px (the stereo search range), the
 // baseline at least min_baseline_m, the viewing directions at most max_rotation_deg apart, and
 // (unless allow_forward, since the stereo fill plane-sweeps forward pairs) the epipole outside both
 // images. The geometry is screened with the tracked poses and the chosen pair's refined pose
@@ -17,7 +17,8 @@
 //
 // No threads, no I/O. Usage:
 //   gf::KeyframePairScheduler scheduler(camera, {});
-//   for (each new keyframe) for (const gf::StereoJob& job : scheduler.Add(frame, world_from_camera))
+//   for (each new keyframe) for (const gf::StereoJob& job : scheduler.Add(frame,
+//   world_from_camera))
 //     FillHolesByStereo(job.key1->frame, job.key2->frame, camera,
 //                       job.choice.partner_pose.key1_from_key2, ...);   // key2 may be null
 //   for (const gf::StereoJob& job : scheduler.Flush()) ...
@@ -56,17 +57,17 @@ struct PoseRefinementOptions {
 };
 
 struct PairSelectionOptions {
-  int min_matches = 40;            // M: SURF matches the pair must share (PnP RANSAC inliers)
-  int max_evaluations = 10;        // candidates matched at most per keyframe (farthest first)
-  double min_baseline_m = 0.04;    // shorter baselines give too little parallax, metres
-  double max_baseline_m = 0.50;    // longer ones change the view too much for block matching
+  int min_matches = 40;                // M: SURF matches the pair must share (PnP RANSAC inliers)
+  int max_evaluations = 10;            // candidates matched at most per keyframe (farthest first)
+  double min_baseline_m = 0.04;        // shorter baselines give too little parallax, metres
+  double max_baseline_m = 0.50;        // longer ones change the view too much for block matching
   double min_median_disparity_px = 8;  // parallax at I1's median depth, pixels
   double max_near_disparity_px = 112;  // parallax at I1's near depth; keep <= the stereo search
   double epipole_margin_px = 40;       // epipole inside an image or this close: forward motion
   bool allow_forward = true;           // forward pairs too (the stereo fill plane-sweeps them)
-  double max_rotation_deg = 20.0;  // largest angle between the two viewing directions, degrees
-  int window = 30;                 // earlier keyframes considered as partners
-  int lookahead = 3;               // later keyframes waited for before a keyframe is paired
+  double max_rotation_deg = 20.0;      // largest angle between the two viewing directions, degrees
+  int window = 30;                     // earlier keyframes considered as partners
+  int lookahead = 3;                   // later keyframes waited for before a keyframe is paired
   SurfOptions surf = [] {
     SurfOptions s;
     s.upright = true;
@@ -100,7 +101,7 @@ struct PoseRefinement {
   SE3 key1_from_key2;  // refined, or the initial pose when !success
   int matches = 0;     // matches with a 3D point in key2
   int inliers = 0;
-  double rmse_px = 0;  // reprojection RMSE of the inliers
+  double rmse_px = 0;                   // reprojection RMSE of the inliers
   double change_m = 0, change_deg = 0;  // refined against initial
   std::string termination;
   std::string BriefReport() const;
@@ -119,8 +120,8 @@ struct PairChoice {
   PoseRefinement third_pose;    // key1_from_third, refined
   double baseline_m = 0;
   double rotation_deg = 0;
-  int evaluated = 0;       // candidates whose matches were counted
-  std::string reason;      // why none was found
+  int evaluated = 0;   // candidates whose matches were counted
+  std::string reason;  // why none was found
   std::string BriefReport() const;
 };
 

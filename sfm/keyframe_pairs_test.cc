@@ -16,8 +16,8 @@ class KeyframePairs : public ::testing::Test {
     poses_ = synth::MakeTrajectory(scene_, options);
   }
   RgbdFrame Frame(int i) const {
-    return synth::ToRgbdFrame(
-        synth::RenderFrame(scene_, synth::SynthCamera(), poses_[i], {}, 5, i), i);
+    return synth::ToRgbdFrame(synth::RenderFrame(scene_, synth::SynthCamera(), poses_[i], {}, 5, i),
+                              i);
   }
   synth::Scene scene_;
   std::vector<SE3> poses_;
@@ -30,7 +30,8 @@ TEST_F(KeyframePairs, RefinesAPerturbedPairPose) {
   const auto a = MakeStereoKeyframe(0, Frame(10), poses_[10], camera, options.surf);
   const auto b = MakeStereoKeyframe(1, Frame(16), poses_[16], camera, options.surf);
   const SE3 truth = poses_[10].Inverse() * poses_[16];
-  const SE3 nudge = SE3::Exp((SE3::Tangent() << 0.015, -0.01, 0.008, 0.01, 0.012, -0.008).finished());
+  const SE3 nudge =
+      SE3::Exp((SE3::Tangent() << 0.015, -0.01, 0.008, 0.01, 0.012, -0.008).finished());
   const PoseRefinement r =
       RefinePairPose(*a, *b, camera, truth * nudge, options.match, options.refine);
   ASSERT_TRUE(r.success) << r.BriefReport();
@@ -69,9 +70,13 @@ TEST_F(KeyframePairs, SchedulerPairsEveryKeyframeWithinTheLimits) {
     EXPECT_LE(c.baseline_m, options.max_baseline_m);
     EXPECT_LE(c.rotation_deg, options.max_rotation_deg + 1);
     EXPECT_NE(jobs[j].key2->id, jobs[j].key1->id);
-    if (jobs[j].third) EXPECT_NE(jobs[j].third->id, jobs[j].key2->id);
-    // Farthest first: no candidate with a longer baseline was accepted instead.
+    if (jobs[j].third) {
+      EXPECT_NE(jobs[j].third->id, jobs[j].key2->id);
+    }
+    // The chosen pair's pose was refined, and lies within 5 mm of the truth.
     EXPECT_TRUE(c.partner_pose.success) << c.partner_pose.BriefReport();
+    const SE3 truth = poses_[frames[j]].Inverse() * poses_[frames[jobs[j].key2->id]];
+    EXPECT_LT((truth.Inverse() * c.partner_pose.key1_from_key2).TranslationNorm(), 0.005);
   }
   EXPECT_GE(paired, static_cast<int>(frames.size()) - 1);
 }

@@ -29,8 +29,8 @@ cv::Mat ToCv(const Eigen::Matrix3d& m) {
 }
 
 struct ViewData {
-  cv::Mat gray;   // undistorted, CV_32F
-  cv::Mat cover;  // CV_32F, 1 where the undistorted image has content
+  cv::Mat gray;              // undistorted, CV_32F
+  cv::Mat cover;             // CV_32F, 1 where the undistorted image has content
   Eigen::Matrix3d rotation;  // view_from_key1
   Eigen::Vector3d translation;
 };
@@ -125,7 +125,8 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
   const int rows = roi.height, cols = roi.width;
   cv::Mat best(rows, cols, CV_32F, cv::Scalar(-2.f)), best_k(rows, cols, CV_32S, cv::Scalar(-1));
   cv::Mat second(rows, cols, CV_32F, cv::Scalar(-2.f)), left(rows, cols, CV_32F, cv::Scalar(kNaN));
-  cv::Mat right(rows, cols, CV_32F, cv::Scalar(kNaN)), previous(rows, cols, CV_32F, cv::Scalar(kNaN));
+  cv::Mat right(rows, cols, CV_32F, cv::Scalar(kNaN)),
+      previous(rows, cols, CV_32F, cv::Scalar(kNaN));
   const Eigen::Matrix3d k = camera.K(), k_inv = k.inverse();
   Eigen::Matrix3d shift = Eigen::Matrix3d::Identity();  // ROI pixel -> full image pixel
   shift(0, 2) = roi.x;

@@ -123,7 +123,6 @@ bool StereoPointsFromLeft(const cv::Mat& color_first, const cv::Mat& color_secon
   return true;
 }
 
-
 // Photometric check of a filled pixel in a third keyframe: the filled point, projected into the
 // third view, must look like it does in keyframe 1 (NCC of small patches; mean grey levels for
 // textureless patches). Points the third view's sensor sees behind a nearer surface, or outside
@@ -145,9 +144,10 @@ class PhotometricCheck {
   double Agreement(int x, int y, double depth) const {
     if (!active()) return 1.0;
     const int r = options_.photometric_patch_px / 2;
-    const Eigen::Vector2d n = camera_.Undistort(
-        {(x - camera_.cx) / camera_.fx, (y - camera_.cy) / camera_.fy});
-    const Eigen::Vector3d p3 = key3_from_key1_ * Eigen::Vector3d(n.x() * depth, n.y() * depth, depth);
+    const Eigen::Vector2d n =
+        camera_.Undistort({(x - camera_.cx) / camera_.fx, (y - camera_.cy) / camera_.fy});
+    const Eigen::Vector3d p3 =
+        key3_from_key1_ * Eigen::Vector3d(n.x() * depth, n.y() * depth, depth);
     if (p3.z() <= 0) return 1.0;
     const Eigen::Vector2d q = camera_.ProjectDistorted(p3);
     const int qx = static_cast<int>(std::lround(q.x())), qy = static_cast<int>(std::lround(q.y()));
@@ -159,7 +159,8 @@ class PhotometricCheck {
     const int count = (2 * r + 1) * (2 * r + 1);
     for (int dy = -r; dy <= r; ++dy) {
       for (int dx = -r; dx <= r; ++dx) {
-        const double a = gray1_.at<uint8_t>(y + dy, x + dx), b = gray3_.at<uint8_t>(qy + dy, qx + dx);
+        const double a = gray1_.at<uint8_t>(y + dy, x + dx),
+                     b = gray3_.at<uint8_t>(qy + dy, qx + dx);
         sa += a;
         sb += b;
         saa += a * a;
@@ -168,12 +169,13 @@ class PhotometricCheck {
       }
     }
     const double ma = sa / count, mb = sb / count;
-    const double va = std::max(0.0, saa / count - ma * ma), vb = std::max(0.0, sbb / count - mb * mb);
+    const double va = std::max(0.0, saa / count - ma * ma),
+                 vb = std::max(0.0, sbb / count - mb * mb);
     const double min_var = options_.min_patch_std * options_.min_patch_std;
     if (va < min_var || vb < min_var) {
       const double diff = std::abs(ma - mb);
       return diff <= options_.max_mean_difference ? 1.0 - 0.5 * diff / options_.max_mean_difference
-                                                 : 0.0;
+                                                  : 0.0;
     }
     const double ncc = (sab / count - ma * mb) / std::sqrt(va * vb);
     return ncc >= options_.min_ncc ? ncc : 0.0;
@@ -219,13 +221,14 @@ bool StereoFillOptions::Check(std::string* message) const {
 
 std::string StereoFillResult::BriefReport() const {
   char buffer[300];
-  std::snprintf(buffer, sizeof(buffer),
-                "stereo fill (%s) %s: %d of %d hole pixels filled (%.1f%%), stereo vs sensor median "
-                "error %.2f%% (%.1f mm); rejected by ring %d, by %s %d",
-                method.c_str(), termination.c_str(), filled_pixels, hole_pixels,
-                hole_pixels ? 100.0 * filled_pixels / hole_pixels : 0.0,
-                100.0 * stereo_error_median, 1000.0 * stereo_error_median_m, rejected_by_ring,
-                third_view_used ? "third view" : "(no third view)", rejected_by_photometry);
+  std::snprintf(
+      buffer, sizeof(buffer),
+      "stereo fill (%s) %s: %d of %d hole pixels filled (%.1f%%), stereo vs sensor median "
+      "error %.2f%% (%.1f mm); rejected by ring %d, by %s %d",
+      method.c_str(), termination.c_str(), filled_pixels, hole_pixels,
+      hole_pixels ? 100.0 * filled_pixels / hole_pixels : 0.0, 100.0 * stereo_error_median,
+      1000.0 * stereo_error_median_m, rejected_by_ring,
+      third_view_used ? "third view" : "(no third view)", rejected_by_photometry);
   return buffer;
 }
 
@@ -292,8 +295,7 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     if (!StereoPointsFromLeft(key1.color, key2.color, camera, key1_from_key2.Inverse(), options,
                               &points)) {
       key1_from_points = key1_from_key2;
-      if (!StereoPointsFromLeft(key2.color, key1.color, camera, key1_from_key2, options,
-                                &points)) {
+      if (!StereoPointsFromLeft(key2.color, key1.color, camera, key1_from_key2, options, &points)) {
         result.termination = "rectification failed";
         return result;
       }
@@ -303,7 +305,8 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
       const Eigen::Vector3d p = key1_from_points * q;
       if (p.z() < options.min_depth_m || p.z() > options.max_depth_m) continue;
       const Eigen::Vector2d px = camera.ProjectDistorted(p);
-      const int x = static_cast<int>(std::lround(px.x())), y = static_cast<int>(std::lround(px.y()));
+      const int x = static_cast<int>(std::lround(px.x())),
+                y = static_cast<int>(std::lround(px.y()));
       if (x < 0 || y < 0 || x >= stereo.cols || y >= stereo.rows) continue;
       float& cell = stereo.at<float>(y, x);
       if (cell == 0.f || p.z() < cell) cell = static_cast<float>(p.z());

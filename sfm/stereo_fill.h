@@ -10,8 +10,8 @@
 // that agree (left-right check), convert to metric depth in the left camera, move it into
 // keyframe 1 with the known pose and project it into keyframe 1's image (z-buffer), then validate:
 // the stereo depth must agree with the Kinect on measured pixels around each hole, or that hole is
-// left empty. Where a third keyframe sees the filled point, its colour there must match keyframe 1's
-// (normalised cross-correlation of small patches), unless the third keyframe's sensor shows the
+// left empty. Where a third keyframe sees the filled point, its colour there must match keyframe
+// 1's (normalised cross-correlation of small patches), unless the third keyframe's sensor shows the
 // point hidden behind a nearer surface. Only pixels the sensor left empty are filled; measured
 // pixels are never changed. Each filled pixel carries a confidence and a source tag.
 //
@@ -34,10 +34,10 @@
 namespace gf {
 
 struct StereoFillOptions {
-  double min_baseline_m = 0.04;       // shorter baselines give too little parallax, metres
-  double epipole_margin_px = 40;      // epipole this close to the image (or inside): forward motion
-  bool plane_sweep_forward = true;    // forward motion: plane sweep (else the pair is skipped)
-  bool plane_sweep_always = false;    // plane sweep for sideways pairs too (instead of SGBM)
+  double min_baseline_m = 0.04;     // shorter baselines give too little parallax, metres
+  double epipole_margin_px = 40;    // epipole this close to the image (or inside): forward motion
+  bool plane_sweep_forward = true;  // forward motion: plane sweep (else the pair is skipped)
+  bool plane_sweep_always = false;  // plane sweep for sideways pairs too (instead of SGBM)
   PlaneSweepOptions plane_sweep;
   int num_disparities = 128;          // SGBM search range, pixels (multiple of 16)
   int block_size = 5;                 // SGBM block, pixels (odd)
@@ -47,18 +47,18 @@ struct StereoFillOptions {
   double max_lr_difference_px = 1.0;  // left-right consistency, pixels
   double min_depth_m = 0.3;           // filled depths outside this range are dropped, metres
   double max_depth_m = 6.0;
-  int ring_px = 6;               // validation ring around each hole, pixels
-  int min_ring_samples = 15;     // holes with fewer stereo/Kinect pairs in the ring stay empty
-  double max_ring_error = 0.03;  // median relative error allowed in the ring
+  int ring_px = 6;                    // validation ring around each hole, pixels
+  int min_ring_samples = 15;          // holes with fewer stereo/Kinect pairs in the ring stay empty
+  double max_ring_error = 0.03;       // median relative error allowed in the ring
   bool ring_scale_correction = true;  // scale each hole's stereo by its ring's sensor/stereo ratio
   double max_ring_scale = 0.10;       // ... when that ratio is within 1 +- this
-  double max_pair_error = 0.08;  // median relative error over the whole image: else reject
-  int edge_margin_px = 2;        // drop stereo depth this close to a depth discontinuity
-  double edge_jump = 0.05;       // relative depth step that counts as a discontinuity
+  double max_pair_error = 0.08;       // median relative error over the whole image: else reject
+  int edge_margin_px = 2;             // drop stereo depth this close to a depth discontinuity
+  double edge_jump = 0.05;            // relative depth step that counts as a discontinuity
   // Photometric check in a third keyframe (when one is given).
-  int photometric_patch_px = 7;   // patch side for the comparison, pixels (odd)
-  double min_ncc = 0.5;           // textured patches must correlate at least this much
-  double min_patch_std = 4.0;     // below this grey-level spread a patch counts as textureless ...
+  int photometric_patch_px = 7;  // patch side for the comparison, pixels (odd)
+  double min_ncc = 0.5;          // textured patches must correlate at least this much
+  double min_patch_std = 4.0;    // below this grey-level spread a patch counts as textureless ...
   double max_mean_difference = 25.0;  // ... and then only the mean grey levels are compared
   double occlusion_margin = 0.05;     // third view's sensor nearer by this (relative): hidden there
   bool Check(std::string* message = nullptr) const;
@@ -85,8 +85,8 @@ struct StereoFillResult {
                             // ones (ring agreement times photometric agreement), 0 elsewhere
   int hole_pixels = 0;      // pixels the sensor left empty
   int filled_pixels = 0;
-  int rejected_by_ring = 0;         // hole pixels with stereo depth whose hole failed the ring test
-  int rejected_by_photometry = 0;   // ... that the third view contradicted
+  int rejected_by_ring = 0;        // hole pixels with stereo depth whose hole failed the ring test
+  int rejected_by_photometry = 0;  // ... that the third view contradicted
   bool third_view_used = false;
   double stereo_error_median = 0;    // relative, stereo vs Kinect where both exist
   double stereo_error_median_m = 0;  // the same in metres
