@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <Eigen/Core>
+#include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
 #include <thread>
@@ -51,8 +53,7 @@ nlohmann::ordered_json Summarise(const MethodResult& m, const Trajectory* gt) {
 
 Eigen::Matrix4d ToEigen(const cv::Mat& m) {
   Eigen::Matrix4d e;
-  for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c) e(r, c) = m.at<double>(r, c);
+  cv::cv2eigen(m, e);
   return e;
 }
 

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <Eigen/Core>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
 
@@ -41,16 +43,13 @@ bool PhotometricRefine(const RgbdFrame& key1, const RgbdFrame& key2, const Camer
   camera.CvK().convertTo(k, CV_32F);
   cv::Ptr<cv::rgbd::RgbdOdometry> odometry = cv::rgbd::RgbdOdometry::create(
       k, 0.3f, 5.f, 0.07f, std::vector<int>{10, 10, 10, 10}, std::vector<float>(), 0.5f);
-  const Eigen::Matrix4d m = initial.Matrix();
-  cv::Mat init(4, 4, CV_64F), rt;
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) init.at<double>(i, j) = m(i, j);
+  cv::Mat init, rt;
+  cv::eigen2cv(initial.Matrix(), init);
   // compute() returns dst_from_src for (src = key2, dst = key1).
   if (!odometry->compute(gray2, depth2, cv::Mat(), gray1, depth1, cv::Mat(), rt, init))
     return false;
   Eigen::Matrix4d out;
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) out(i, j) = rt.at<double>(i, j);
+  cv::cv2eigen(rt, out);
   *refined = SE3::FromMatrix(out);
   return true;
 }

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <Eigen/Core>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "acquisition/errors.h"
@@ -19,13 +21,6 @@ cv::Mat GrayFloat(const cv::Mat& bgr) {
   cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
   gray.convertTo(f, CV_32F);
   return f;
-}
-
-cv::Mat ToCv(const Eigen::Matrix3d& m) {
-  cv::Mat out(3, 3, CV_64F);
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) out.at<double>(i, j) = m(i, j);
-  return out;
 }
 
 struct ViewData {
@@ -142,7 +137,8 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
       Eigen::Matrix3d h = v.rotation;
       h.col(2) += v.translation * w;  // R + t n^T / z with n = (0, 0, 1)
       const Eigen::Matrix3d key1_to_view = k * h * k_inv * shift;
-      const cv::Mat homography = ToCv(key1_to_view);
+      cv::Mat homography;
+      cv::eigen2cv(key1_to_view, homography);
       cv::warpPerspective(v.gray, warped, homography, roi.size(),
                           cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT,
                           cv::Scalar(0));

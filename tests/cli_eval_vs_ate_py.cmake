@@ -14,11 +14,7 @@ if(NOT rc EQUAL 0)
 endif()
 string(JSON ours GET "${out}" ate_rmse_m)
 string(JSON pairs GET "${out}" pairs)
-# Debian's python3 has numpy; a python3 earlier on PATH may not.
-find_program(PYTHON NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
-if(NOT PYTHON)
-  find_program(PYTHON NAMES python3)
-endif()
+include("${CMAKE_CURRENT_LIST_DIR}/find_python.cmake")
 execute_process(COMMAND "${PYTHON}" "${ate_py}" "${icl}/groundtruth.log" "${icl}/open3d_estimate.log"
                 RESULT_VARIABLE rc OUTPUT_VARIABLE theirs_out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)

@@ -9,11 +9,7 @@ if(NOT EXISTS "${input}" OR NOT EXISTS "${tools}/punch-holes.py")
   message("SKIPPED: ${input} or ${tools} not present")
   return()
 endif()
-# Debian's python3 has numpy and OpenCV; a python3 earlier on PATH may not.
-find_program(PYTHON NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
-if(NOT PYTHON)
-  find_program(PYTHON NAMES python3)
-endif()
+include("${CMAKE_CURRENT_LIST_DIR}/find_python.cmake")
 set(work "${CMAKE_CURRENT_BINARY_DIR}/cli_fill_tmp")
 file(REMOVE_RECURSE "${work}")
 execute_process(COMMAND "${PYTHON}" "${tools}/punch-holes.py" "${input}" "${work}/punched" 0 40
