@@ -67,6 +67,7 @@ bool PairSelectionOptions::Check(std::string* message) const {
     return fail("need 0 < min_baseline_m < max_baseline_m");
   if (!(max_rotation_deg > 0)) return fail("max_rotation_deg must be positive");
   if (!(min_median_disparity_px >= 0) || !(max_near_disparity_px > min_median_disparity_px) ||
+      !(max_near_disparity_sweep_px > min_median_disparity_px) ||
       !(epipole_margin_px >= 0))
     return fail("need 0 <= min_median_disparity_px < max_near_disparity_px, margin >= 0");
   if (window < 1 || lookahead < 0) return fail("need window >= 1 and lookahead >= 0");
@@ -238,17 +239,20 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
     // Parallax comes from the motion across key1's optical axis, or from all of it when forward
     // pairs go to the plane sweep.
     const double lateral = options.allow_forward ? g.baseline : rel.translation().head<2>().norm();
+    const bool is_forward = EpipoleInsideImage(camera, rel, options.epipole_margin_px) ||
+                            EpipoleInsideImage(camera, rel.Inverse(), options.epipole_margin_px);
+    // Rectified stereo searches a fixed disparity range; the plane sweep (forward pairs) does not.
+    const double max_near_disparity =
+        is_forward ? options.max_near_disparity_sweep_px : options.max_near_disparity_px;
     if (g.baseline < options.min_baseline_m ||
         f * lateral / median_depth < options.min_median_disparity_px) {
       ++too_short;
     } else if (g.baseline > options.max_baseline_m ||
-               f * lateral / near_depth > options.max_near_disparity_px) {
+               f * lateral / near_depth > max_near_disparity) {
       ++too_long;
     } else if (g.rotation_deg > options.max_rotation_deg) {
       ++too_rotated;
-    } else if (!options.allow_forward &&
-               (EpipoleInsideImage(camera, rel, options.epipole_margin_px) ||
-                EpipoleInsideImage(camera, rel.Inverse(), options.epipole_margin_px))) {
+    } else if (!options.allow_forward && is_forward) {
       ++forward;
     } else {
       in_range.push_back(g);
