@@ -4,7 +4,9 @@
 // OUT/glass-table, reads it back through the same frame source a user's capture goes through, and
 // writes OUT/report.json and OUT/report.html: the sensor's holes per material (what the stereo
 // fill exists for), an overview image of the first frame, and the holes of every dataset folder
-// found under --data. Reconstruction and stereo fill join the report as the pipeline lands.
+// found under --data; then reconstructs the scene into OUT/run (tracking + stereo fill) and
+// reports the trajectory error and, per material, how many keyframe holes were filled and how
+// well (against the ground-truth depth of what the colour camera sees), with a fill overlay.
 #pragma once
 
 #include <string>
