@@ -200,6 +200,12 @@ ReconstructSummary RunReconstruct(const ReconstructOptions& options) {
   report["frames"] = summary.frames;
   report["fps"] = summary.fps;
   report["stages"] = {{"read", StageStats(read_ms)}, {"track", StageStats(track_ms)}};
+  if (fill) {
+    std::vector<double> stereo_ms;  // per keyframe: pairing, pose refinement, stereo, validation
+    for (const KeyframeFill& k : fill->keyframes())
+      if (!k.partner.empty()) stereo_ms.push_back(k.ms);
+    report["stages"]["stereo"] = StageStats(stereo_ms);
+  }
   report["keyframes"] = summary.keyframes;
   report["tracking"] = {{"lost_frames", summary.lost}};
   report["loops"] = nullptr;  // loop closure: not built yet
