@@ -61,6 +61,10 @@ struct Camera {
   // Iterative inverse of Distort (fixed-point, as cv::undistortPoints); exact to ~1e-9 for
   // Kinect-like lenses.
   Eigen::Vector2d Undistort(const Eigen::Vector2d& distorted_normalized) const;
+  // Undistorted normalised coordinates (x/z, y/z) of the ray through a (distorted) image pixel.
+  Eigen::Vector2d UndistortPixel(const Eigen::Vector2d& pixel) const {
+    return Undistort({(pixel.x() - cx) / fx, (pixel.y() - cy) / fy});
+  }
 
   bool InImage(const Eigen::Vector2d& pixel) const {
     return pixel.x() >= -0.5 && pixel.y() >= -0.5 && pixel.x() < width - 0.5 &&

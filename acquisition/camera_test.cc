@@ -134,6 +134,9 @@ TEST(Camera, UndistortInvertsDistortOverTheImage) {
     for (double y = -0.45; y <= 0.45; y += 0.05) {
       const Eigen::Vector2d n(x, y);
       EXPECT_LT((c.Undistort(c.Distort(n)) - n).norm(), 1e-9) << x << "," << y;
+      // UndistortPixel inverts ProjectDistorted.
+      const Eigen::Vector2d pixel = c.ProjectDistorted({x * 2.0, y * 2.0, 2.0});
+      EXPECT_LT((c.UndistortPixel(pixel) - n).norm(), 1e-9) << x << "," << y;
     }
   }
 }

@@ -190,8 +190,7 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
       auto lookup = [&](int x, int y) -> float {
         int u = x, v = y;
         if (dense_camera) {
-          const Eigen::Vector2d n =
-              camera.Undistort({(x - camera.cx) / camera.fx, (y - camera.cy) / camera.fy});
+          const Eigen::Vector2d n = camera.UndistortPixel({x, y});
           u = static_cast<int>(std::lround(grid.fx * n.x() + grid.cx));
           v = static_cast<int>(std::lround(grid.fy * n.y() + grid.cy));
           if (u < 0 || v < 0 || u >= grid.width || v >= grid.height) return 0.f;

@@ -1,10 +1,10 @@
 #include "sfm/keyframe_pairs.h"
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numeric>
-#include <Eigen/Core>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
@@ -19,9 +19,7 @@ namespace {
 constexpr double kDegPerRad = 180.0 / M_PI;
 
 Eigen::Vector3d NormalizedRay(const Camera& camera, const cv::Point2f& pixel) {
-  const Eigen::Vector2d n =
-      camera.Undistort({(pixel.x - camera.cx) / camera.fx, (pixel.y - camera.cy) / camera.fy});
-  return {n.x(), n.y(), 1.0};
+  return camera.UndistortPixel({pixel.x, pixel.y}).homogeneous();
 }
 
 // key1_from_key2 by OpenCV's dense photometric RGB-D odometry, started from `initial`. The images
@@ -67,8 +65,7 @@ bool PairSelectionOptions::Check(std::string* message) const {
     return fail("need 0 < min_baseline_m < max_baseline_m");
   if (!(max_rotation_deg > 0)) return fail("max_rotation_deg must be positive");
   if (!(min_median_disparity_px >= 0) || !(max_near_disparity_px > min_median_disparity_px) ||
-      !(max_near_disparity_sweep_px > min_median_disparity_px) ||
-      !(epipole_margin_px >= 0))
+      !(max_near_disparity_sweep_px > min_median_disparity_px) || !(epipole_margin_px >= 0))
     return fail("need 0 <= min_median_disparity_px < max_near_disparity_px, margin >= 0");
   if (window < 1 || lookahead < 0) return fail("need window >= 1 and lookahead >= 0");
   return surf.Check(message) && match.Check(message) && refine.Check(message);

@@ -1,10 +1,10 @@
 #include "sfm/plane_sweep.h"
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <Eigen/Core>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
@@ -229,8 +229,7 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
       if (!mask.at<uint8_t>(y, x)) continue;
       int ux = x, uy = y;
       if (distorted) {
-        const Eigen::Vector2d n =
-            camera.Undistort({(x - camera.cx) / camera.fx, (y - camera.cy) / camera.fy});
+        const Eigen::Vector2d n = camera.UndistortPixel({x, y});
         ux = static_cast<int>(std::lround(camera.fx * n.x() + camera.cx));
         uy = static_cast<int>(std::lround(camera.fy * n.y() + camera.cy));
         if (ux < 0 || uy < 0 || ux >= size.width || uy >= size.height) continue;

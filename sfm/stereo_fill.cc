@@ -144,8 +144,7 @@ class PhotometricCheck {
   double Agreement(int x, int y, double depth) const {
     if (!active()) return 1.0;
     const int r = options_.photometric_patch_px / 2;
-    const Eigen::Vector2d n =
-        camera_.Undistort({(x - camera_.cx) / camera_.fx, (y - camera_.cy) / camera_.fy});
+    const Eigen::Vector2d n = camera_.UndistortPixel({x, y});
     const Eigen::Vector3d p3 =
         key3_from_key1_ * Eigen::Vector3d(n.x() * depth, n.y() * depth, depth);
     if (p3.z() <= 0) return 1.0;
