@@ -1,5 +1,6 @@
 #include "acquisition/depth.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <vector>
@@ -190,6 +191,16 @@ HoleStats& HoleStats::operator+=(const HoleStats& o) {
   out_of_range += o.out_of_range;
   shadow += o.shadow;
   return *this;
+}
+
+std::vector<float> SortedDepthSample(const cv::Mat& depth_m, int step) {
+  GF_CHECK(depth_m.type() == CV_32FC1 && step >= 1, "need CV_32F depth and step >= 1");
+  std::vector<float> sample;
+  for (int y = 0; y < depth_m.rows; y += step)
+    for (int x = 0; x < depth_m.cols; x += step)
+      if (depth_m.at<float>(y, x) > 0) sample.push_back(depth_m.at<float>(y, x));
+  std::sort(sample.begin(), sample.end());
+  return sample;
 }
 
 HoleStats CountHoles(const cv::Mat& hole_mask) {

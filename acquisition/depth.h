@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 namespace gf {
 
@@ -122,5 +123,9 @@ struct HoleStats {
   HoleStats& operator+=(const HoleStats& o);
 };
 HoleStats CountHoles(const cv::Mat& hole_mask);
+
+// The measured depths (> 0) of every step-th pixel in each direction of a metric depth image
+// (CV_32F), sorted ascending: a cheap basis for a frame's depth percentiles.
+std::vector<float> SortedDepthSample(const cv::Mat& depth_m, int step);
 
 }  // namespace gf

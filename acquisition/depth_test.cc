@@ -149,3 +149,19 @@ TEST(ImageIo, BadDepthFilesGiveErrorsNamingTheFile) {
 
 }  // namespace
 }  // namespace gf
+
+namespace gf {
+namespace {
+
+TEST(SortedDepthSample, KeepsMeasuredPixelsOnTheGridInOrder) {
+  cv::Mat depth(4, 6, CV_32FC1, cv::Scalar(0.f));
+  depth.at<float>(0, 0) = 2.f;
+  depth.at<float>(0, 2) = 1.f;
+  depth.at<float>(2, 4) = 3.f;
+  depth.at<float>(1, 1) = 9.f;  // off the step-2 grid
+  EXPECT_EQ(SortedDepthSample(depth, 2), (std::vector<float>{1.f, 2.f, 3.f}));
+  EXPECT_EQ(SortedDepthSample(depth, 1).size(), 4u);
+}
+
+}  // namespace
+}  // namespace gf

@@ -13,6 +13,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
 #include "sfm/colmap_io.h"
 
@@ -47,12 +48,6 @@ std::string StampOfName(const std::string& name) {
   const size_t dot = name.rfind(".png");
   if (underscore == std::string::npos || dot == std::string::npos || dot <= underscore) return "";
   return name.substr(underscore + 1, dot - underscore - 1);
-}
-
-double Median(std::vector<float> v) {
-  if (v.empty()) return 1.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
 }
 
 }  // namespace
@@ -205,7 +200,7 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
           const float z = lookup(x, y), sensor = filled.at<uint16_t>(y, x) / 1000.f;
           if (z > 0) errors.push_back(std::abs(z - sensor) / sensor);
         }
-      const double error = Median(errors);
+      const double error = Median(errors, 1.f);
       const bool agrees = static_cast<int>(errors.size()) >= options.min_sensor_samples &&
                           error <= options.max_sensor_error;
       long added = 0;

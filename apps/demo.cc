@@ -10,6 +10,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
 #include "apps/info.h"
@@ -189,11 +190,6 @@ void RunDemo(const DemoOptions& options) {
     fs::copy_file(fs::path(run_dir) / "keyframes" / (overlay_ts + ".fill_overlay.png"),
                   fs::path(options.out_dir) / "fill_overlay.png",
                   fs::copy_options::overwrite_existing);
-  auto median = [](std::vector<float> v) -> double {
-    if (v.empty()) return 0;
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
 
   // 4. Real datasets, when they are on this machine.
   std::string data_dir = options.data_dir;
@@ -230,7 +226,7 @@ void RunDemo(const DemoOptions& options) {
         {"filled_pixels", fill_filled[m]},
         {"fill_rate", fill_holes[m] ? double(fill_filled[m]) / fill_holes[m] : 0.0},
         {"good_rate", fill_holes[m] ? double(fill_good[m]) / fill_holes[m] : 0.0},
-        {"median_error", median(fill_errors[m])}};
+        {"median_error", Median(fill_errors[m])}};
   report["fill_by_material"] = fill_by_material;
   report["run"] = run_dir;
   report["datasets"] = nlohmann::json::array();
@@ -273,7 +269,7 @@ void RunDemo(const DemoOptions& options) {
          << fill_holes[m] << "</td><td>"
          << Percent(fill_holes[m] ? double(fill_filled[m]) / fill_holes[m] : 0) << "</td><td>"
          << Percent(fill_holes[m] ? double(fill_good[m]) / fill_holes[m] : 0) << "</td><td>"
-         << Percent(median(fill_errors[m])) << "</td></tr>";
+         << Percent(Median(fill_errors[m])) << "</td></tr>";
   html << "</table>";
   if (!overlay_ts.empty())
     html << "<p>Keyframe " << overlay_ts

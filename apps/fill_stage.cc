@@ -10,17 +10,12 @@
 
 #include "acquisition/errors.h"
 #include "acquisition/image_io.h"
+#include "acquisition/stats.h"
 
 namespace fs = std::filesystem;
 
 namespace gf {
 namespace {
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 cv::Mat ToMillimetres(const cv::Mat& depth_m) {
   cv::Mat mm(depth_m.size(), CV_16UC1);

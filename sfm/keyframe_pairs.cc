@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
 
+#include "acquisition/depth.h"
 #include "acquisition/errors.h"
 #include "sfm/stereo_fill.h"
 
@@ -216,16 +217,11 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
     double baseline, rotation_deg;
   };
   // Key1's depth range (median and 5th percentile of its measured depth).
-  std::vector<float> depths;
-  const cv::Mat& depth = key1.frame.depth;
-  for (int y = 0; y < depth.rows; y += 4)
-    for (int x = 0; x < depth.cols; x += 4)
-      if (depth.at<float>(y, x) > 0) depths.push_back(depth.at<float>(y, x));
+  const std::vector<float> depths = SortedDepthSample(key1.frame.depth, 4);
   if (depths.size() < 100) {
     choice.reason = "keyframe has almost no measured depth";
     return choice;
   }
-  std::sort(depths.begin(), depths.end());
   const double median_depth = depths[depths.size() / 2], near_depth = depths[depths.size() / 20];
   const double f = 0.5 * (camera.fx + camera.fy);
   std::vector<Geometry> in_range;

@@ -9,18 +9,13 @@
 
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
+#include "acquisition/stats.h"
 #include "sfm/plane_sweep.h"
 
 namespace gf {
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-float Median(std::vector<float>& v) {
-  if (v.empty()) return kNaN;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // Disparity (pixels, NaN = none) of `primary`'s pixels against `secondary`. SGBM wants the left
 // image first with disparities x_left - x_right >= 0; a right-hand primary is mirrored so that it
@@ -264,15 +259,11 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   if (forward || options.plane_sweep_always) {
     // Rectification degenerates: plane-sweep the holes and a validation ring around them, within
     // the depth range the sensor measures in keyframe 1.
-    std::vector<float> measured;
-    for (int y = 0; y < key1.depth.rows; y += 4)
-      for (int x = 0; x < key1.depth.cols; x += 4)
-        if (key1.depth.at<float>(y, x) > 0) measured.push_back(key1.depth.at<float>(y, x));
+    const std::vector<float> measured = SortedDepthSample(key1.depth, 4);
     if (measured.size() < 100) {
       result.termination = "keyframe has almost no measured depth";
       return result;
     }
-    std::sort(measured.begin(), measured.end());
     const double near = std::max(options.min_depth_m, 0.8 * measured[measured.size() / 50]);
     const double far =
         std::min(options.max_depth_m, 1.25 * measured[measured.size() - 1 - measured.size() / 50]);
@@ -379,7 +370,6 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   }
   PhotometricCheck photometric(key1, third, camera, options);
   result.third_view_used = photometric.active();
-  std::vector<float> filled_errors_m;
   for (int y = 0; y < stereo.rows; ++y) {
     for (int x = 0; x < stereo.cols; ++x) {
       if (key1.hole_mask.at<uint8_t>(y, x) == 0) continue;  // measured: never overwritten
