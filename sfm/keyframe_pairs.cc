@@ -53,6 +53,26 @@ bool PhotometricRefine(const RgbdFrame& key1, const RgbdFrame& key2, const Camer
   return true;
 }
 
+// Dense photometric alignment from a successful feature refinement (OpenCV's RgbdOdometry on
+// undistorted images): the stereo needs the pose under which key1's colour and key2's colour agree.
+// The change is reported against `initial` (the tracked pose).
+void AddPhotometricStep(const StereoKeyframe& key1, const StereoKeyframe& key2,
+                        const Camera& camera, const SE3& initial,
+                        const PoseRefinementOptions& options, PoseRefinement* r) {
+  if (!r->success) return;
+  SE3 photometric;
+  if (!PhotometricRefine(key1.frame, key2.frame, camera, r->key1_from_key2, &photometric)) return;
+  const SE3 step = r->key1_from_key2.Inverse() * photometric;
+  if (step.TranslationNorm() > options.max_change_m ||
+      step.RotationAngle() * kDegPerRad > options.max_change_deg)
+    return;
+  r->key1_from_key2 = photometric;
+  r->termination = "refined (features + photometric)";
+  const SE3 total = initial.Inverse() * photometric;
+  r->change_m = total.TranslationNorm();
+  r->change_deg = total.RotationAngle() * kDegPerRad;
+}
+
 }  // namespace
 
 bool PairSelectionOptions::Check(std::string* message) const {
@@ -150,22 +170,8 @@ PoseRefinement RefinePairPose(const StereoKeyframe& key1, const StereoKeyframe& 
   r.success = true;
   r.termination = "refined";
   r.key1_from_key2 = refined;
-  if (options.photometric) {
-    // Dense photometric alignment from the PnP pose (OpenCV's RgbdOdometry on undistorted images):
-    // the stereo needs the pose under which key1's colour and key2's colour agree.
-    SE3 photometric;
-    if (PhotometricRefine(key1.frame, key2.frame, camera, refined, &photometric)) {
-      const SE3 step = refined.Inverse() * photometric;
-      if (step.TranslationNorm() <= options.max_change_m &&
-          step.RotationAngle() * kDegPerRad <= options.max_change_deg) {
-        r.key1_from_key2 = photometric;
-        r.termination = "refined (features + photometric)";
-      }
-    }
-  }
-  const SE3 total = initial_key1_from_key2.Inverse() * r.key1_from_key2;
-  r.change_m = total.TranslationNorm();
-  r.change_deg = total.RotationAngle() * kDegPerRad;
+  if (options.photometric)
+    AddPhotometricStep(key1, key2, camera, initial_key1_from_key2, options, &r);
   return r;
 }
 
@@ -285,13 +291,13 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
   }
   if (options.refine.photometric) {
     if (choice.found)
-      choice.partner_pose =
-          RefinePairPose(key1, *candidates[choice.partner], camera,
-                         choice.partner_pose.key1_from_key2, options.match, options.refine);
+      AddPhotometricStep(key1, *candidates[choice.partner], camera,
+                         key1_from_world * candidates[choice.partner]->world_from_camera,
+                         options.refine, &choice.partner_pose);
     if (choice.third >= 0)
-      choice.third_pose =
-          RefinePairPose(key1, *candidates[choice.third], camera, choice.third_pose.key1_from_key2,
-                         options.match, options.refine);
+      AddPhotometricStep(key1, *candidates[choice.third], camera,
+                         key1_from_world * candidates[choice.third]->world_from_camera,
+                         options.refine, &choice.third_pose);
   }
   if (!choice.found) {
     char buffer[200];
