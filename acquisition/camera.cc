@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/calib3d.hpp>
 #include <sstream>
 
 #include "acquisition/errors.h"
@@ -28,6 +29,11 @@ bool Camera::HasDistortion() const {
   for (double d : distortion)
     if (d != 0.0) return true;
   return false;
+}
+
+void Camera::UndistortionMaps(cv::Mat* map1, cv::Mat* map2) const {
+  cv::initUndistortRectifyMap(CvK(), CvDistortion(), cv::Mat(), CvK(), cv::Size(width, height),
+                              CV_16SC2, *map1, *map2);
 }
 
 Eigen::Vector2d Camera::Project(const Eigen::Vector3d& p) const {

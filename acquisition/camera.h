@@ -74,6 +74,9 @@ struct Camera {
   Eigen::Matrix3d K() const;
   cv::Mat CvK() const;           // 3x3 CV_64F
   cv::Mat CvDistortion() const;  // 1x5 CV_64F
+  // cv::remap maps (fixed point, the fast kind) that undistort this camera's images onto the
+  // ideal pinhole camera K with the same size.
+  void UndistortionMaps(cv::Mat* map1, cv::Mat* map2) const;
   // The same camera for an image scaled by `factor` (e.g. 0.5 for a pyramid level).
   Camera Scaled(double factor) const;
 };

@@ -28,8 +28,7 @@ Eigen::Vector3d NormalizedRay(const Camera& camera, const cv::Point2f& pixel) {
 bool PhotometricRefine(const RgbdFrame& key1, const RgbdFrame& key2, const Camera& camera,
                        const SE3& initial, SE3* refined) {
   cv::Mat map_x, map_y;
-  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), cv::Mat(), camera.CvK(),
-                              key1.depth.size(), CV_32FC1, map_x, map_y);
+  camera.UndistortionMaps(&map_x, &map_y);
   auto prepare = [&](const RgbdFrame& f, cv::Mat* gray, cv::Mat* depth) {
     cv::Mat g;
     cv::cvtColor(f.color, g, cv::COLOR_BGR2GRAY);

@@ -28,14 +28,24 @@
 namespace gf {
 
 struct PlaneSweepOptions {
-  int window_px = 9;             // correlation window side, pixels (odd)
-  int max_planes = 96;           // most planes swept
-  double max_step_px = 1.0;      // the plane spacing moves no pixel by more than this, pixels
-  double min_ncc = 0.8;          // best mean correlation needed
-  double min_ncc_margin = 0.05;  // best must beat every plane > 2 steps away by this much
-  double min_parallax_px = 0.15;  // a 3% depth change must move the pixel this much in a view, px
-                                  // (0.6 -> 0.15 raised good fills on punched TUM 0.21 -> 0.27)
-  double min_texture = 3.0;      // grey-level standard deviation of keyframe 1's window
+  int window_px = 7;               // correlation window side, pixels (odd)
+  int max_planes = 96;             // most planes swept
+  double max_step_px = 1.0;        // the plane spacing moves no pixel by more than this, pixels
+  double min_ncc = 0.5;            // textured pixels: mean correlation needed at the chosen plane
+  double min_uniqueness = 0.05;    // chosen plane's (aggregated) cost must be this much (relative)
+                                   // below every plane more than one step away
+  double min_parallax_px = 0.15;   // a 3% depth change must move the pixel this much in a view, px
+                                   // (0.6 -> 0.15 raised good fills on punched TUM 0.21 -> 0.27)
+  double min_texture = 0.5;        // grey-level standard deviation of keyframe 1's window
+  double min_window_inside = 0.3;  // fraction of the window inside keyframe 1's image (borders)
+  // Semi-global aggregation of the matching cost (cost 1 - NCC, in hundredths) along 8 image
+  // paths, as in Hirschmueller's SGM: neighbours on a path pay smooth_small for a change of one
+  // plane and smooth_large for a bigger jump. Lets depth reach weakly textured pixels from their
+  // textured surroundings; 0 for both turns it off (winner-takes-all per pixel).
+  int smooth_small = 4;
+  int smooth_large = 40;
+  int downscale = 2;          // sweep on images shrunk by this factor (1: full size)
+  int textureless_cost = 30;  // cost of every plane where keyframe 1's window has no texture
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -59,7 +59,7 @@ bool StereoPointsFromLeft(const cv::Mat& color_first, const cv::Mat& color_secon
   const cv::Size size(camera.width, camera.height);
   cv::Mat r1, r2, p1, p2, q;
   cv::stereoRectify(camera.CvK(), camera.CvDistortion(), camera.CvK(), camera.CvDistortion(), size,
-                    r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, 0.0, size);
+                    r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, options.rectify_alpha, size);
   const bool vertical = std::abs(p2.at<double>(1, 3)) > std::abs(p2.at<double>(0, 3));
   const double shift = vertical ? p2.at<double>(1, 3) : p2.at<double>(0, 3);  // -f * baseline
   if (shift >= 0) return false;  // `first` is the right camera: the caller swaps the pair
@@ -183,6 +183,121 @@ class PhotometricCheck {
   SE3 key3_from_key1_;
 };
 
+// Validates one stereo depth image (keyframe 1's pixels, 0 = none) against the sensor and fills
+// the hole pixels that pass and are still empty in *result. Appends the stereo-vs-sensor errors
+// (relative, metres) on measured pixels. False, filling nothing, when the stereo disagrees with
+// the sensor over the whole image (median error above max_pair_error).
+bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1,
+                     const PhotometricCheck& photometric, const StereoFillOptions& options,
+                     StereoFillResult* r, std::vector<float>* errors,
+                     std::vector<float>* errors_m) {
+  StereoFillResult& result = *r;
+  cv::Mat stereo = stereo_in.clone();
+  // Block matching spreads a textured surface's depth over the textureless pixels next to it
+  // (foreground fattening); drop stereo depth within edge_margin_px of a depth discontinuity.
+  if (options.edge_margin_px > 0) {
+    cv::Mat edges = cv::Mat::zeros(stereo.size(), CV_8UC1);
+    for (int y = 0; y + 1 < stereo.rows; ++y)
+      for (int x = 0; x + 1 < stereo.cols; ++x) {
+        const float s = stereo.at<float>(y, x);
+        for (float n : {stereo.at<float>(y, x + 1), stereo.at<float>(y + 1, x)})
+          if (s > 0 && n > 0 && std::abs(s - n) > options.edge_jump * std::min(s, n))
+            edges.at<uint8_t>(y, x) = 255;
+      }
+    const int k = 2 * options.edge_margin_px + 1;
+    cv::dilate(edges, edges, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
+    stereo.setTo(0.f, edges);
+  }
+
+  // Validation against the sensor: over the image, and in a ring around each hole.
+  std::vector<float> all_errors;
+  cv::Mat not_hole = key1.hole_mask == 0;
+  cv::Mat distance, labels;
+  cv::distanceTransform(not_hole, distance, labels, cv::DIST_L2, 3, cv::DIST_LABEL_CCOMP);
+  double max_label = 0;
+  cv::minMaxLoc(labels, nullptr, &max_label);
+  // Ring statistics per hole, and per piece of a hole (the hole cut by a grid of ring_cell_px
+  // cells): a piece with enough ring samples of its own is judged by them, others by the hole's.
+  const int cell =
+      options.ring_cell_px > 0 ? options.ring_cell_px : std::max(stereo.cols, stereo.rows);
+  const int cells_x = (stereo.cols + cell - 1) / cell, cells_y = (stereo.rows + cell - 1) / cell;
+  const size_t holes = static_cast<size_t>(max_label) + 1,
+               cells = static_cast<size_t>(cells_x) * cells_y;
+  auto piece_of = [&](int x, int y, int label) {
+    return holes + static_cast<size_t>(label) * cells + static_cast<size_t>(y / cell) * cells_x +
+           x / cell;
+  };
+  // Entries [0, holes): whole holes; [holes, holes + holes * cells): pieces.
+  std::vector<std::vector<float>> ring_errors(holes + holes * cells);
+  std::vector<std::vector<float>> ring_ratios(ring_errors.size());  // sensor / stereo
+  for (int y = 0; y < stereo.rows; ++y) {
+    for (int x = 0; x < stereo.cols; ++x) {
+      const float s = stereo.at<float>(y, x), k = key1.depth.at<float>(y, x);
+      if (!(s > 0) || !(k > 0)) continue;
+      const float e = std::abs(s - k) / k;
+      all_errors.push_back(e);
+      errors_m->push_back(std::abs(s - k));
+      if (distance.at<float>(y, x) <= options.ring_px) {
+        const int label = labels.at<int>(y, x);
+        for (size_t id : {static_cast<size_t>(label), piece_of(x, y, label)}) {
+          ring_errors[id].push_back(e);
+          ring_ratios[id].push_back(k / s);
+        }
+      }
+    }
+  }
+  errors->insert(errors->end(), all_errors.begin(), all_errors.end());
+  if (all_errors.empty() || Median(all_errors) > options.max_pair_error) return false;
+  // Per hole or piece: the ring's median error decides; with ring_scale_correction the stereo
+  // depth is first scaled by the ring's median sensor/stereo ratio (a small pose error scales
+  // stereo depth locally), and the error left after that decides.
+  std::vector<uint8_t> accept(ring_errors.size(), 0);
+  std::vector<float> ring_median(ring_errors.size(), 1.f), ring_scale(ring_errors.size(), 1.f);
+  for (size_t l = 0; l < ring_errors.size(); ++l) {
+    if (static_cast<int>(ring_errors[l].size()) < options.min_ring_samples) continue;
+    if (options.ring_scale_correction) {
+      const float scale = Median(ring_ratios[l]);
+      std::vector<float> left;
+      for (float r : ring_ratios[l]) left.push_back(std::abs(r / scale - 1.f));
+      ring_median[l] = Median(left);
+      ring_scale[l] = scale;
+      accept[l] = ring_median[l] <= options.max_ring_error &&
+                  std::abs(scale - 1.f) <= options.max_ring_scale;
+    } else {
+      ring_median[l] = Median(ring_errors[l]);
+      accept[l] = ring_median[l] <= options.max_ring_error;
+    }
+  }
+  for (int y = 0; y < stereo.rows; ++y) {
+    for (int x = 0; x < stereo.cols; ++x) {
+      if (key1.hole_mask.at<uint8_t>(y, x) == 0) continue;  // measured: never overwritten
+      if (result.fill_mask.at<uint8_t>(y, x)) continue;     // filled by an earlier method
+      if (!(stereo.at<float>(y, x) > 0)) continue;
+      const int hole = labels.at<int>(y, x);
+      const size_t piece = piece_of(x, y, hole);
+      const size_t label =
+          static_cast<int>(ring_errors[piece].size()) >= options.min_ring_samples ? piece : hole;
+      const float s = stereo.at<float>(y, x) * ring_scale[label];
+      if (!accept[label]) {
+        ++result.rejected_by_ring;
+        continue;
+      }
+      const double agreement = photometric.Agreement(x, y, s);
+      if (agreement <= 0) {
+        ++result.rejected_by_photometry;
+        continue;
+      }
+      result.filled_depth.at<float>(y, x) = s;
+      result.fill_mask.at<uint8_t>(y, x) = 255;
+      result.source.at<uint8_t>(y, x) = static_cast<uint8_t>(DepthSource::kStereo);
+      const double ring = ring_median[label] / options.max_ring_error;
+      result.confidence.at<float>(y, x) = static_cast<float>(std::exp(-ring * ring) * agreement);
+      ++result.filled_pixels;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 bool EpipoleInsideImage(const Camera& camera, const SE3& a_from_b, double margin_px) {
@@ -203,9 +318,11 @@ bool StereoFillOptions::Check(std::string* message) const {
   if (num_disparities < 16 || num_disparities % 16)
     return fail("num_disparities: positive multiple of 16");
   if (block_size < 1 || block_size % 2 == 0) return fail("block_size must be odd");
+  if (!(rectify_alpha >= -1 && rectify_alpha <= 1)) return fail("rectify_alpha: -1 (default) or 0..1");
   if (!(max_lr_difference_px >= 0) || !(min_depth_m > 0) || !(max_depth_m > min_depth_m))
     return fail("need lr difference >= 0 and 0 < min_depth_m < max_depth_m");
-  if (ring_px < 1 || min_ring_samples < 1 || !(max_ring_error > 0) || !(max_pair_error > 0))
+  if (ring_px < 1 || min_ring_samples < 1 || ring_cell_px < 0 || !(max_ring_error > 0) ||
+      !(max_pair_error > 0))
     return fail("ring and error thresholds must be positive");
   if (photometric_patch_px < 3 || photometric_patch_px % 2 == 0 || !(min_ncc > -1) ||
       !(min_patch_std >= 0) || !(max_mean_difference > 0) || !(occlusion_margin >= 0))
@@ -248,7 +365,6 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     result.termination = "baseline too short";
     return result;
   }
-  cv::Mat& stereo = result.stereo_depth;
   const bool forward =
       EpipoleInsideImage(camera, key1_from_key2, options.epipole_margin_px) ||
       EpipoleInsideImage(camera, key1_from_key2.Inverse(), options.epipole_margin_px);
@@ -256,28 +372,13 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     result.termination = "forward motion (epipole inside the image)";
     return result;
   }
-  if (forward || options.plane_sweep_always) {
-    // Rectification degenerates: plane-sweep the holes and a validation ring around them, within
-    // the depth range the sensor measures in keyframe 1.
-    const std::vector<float> measured = SortedDepthSample(key1.depth, 4);
-    if (measured.size() < 100) {
-      result.termination = "keyframe has almost no measured depth";
-      return result;
-    }
-    const double near = std::max(options.min_depth_m, 0.8 * measured[measured.size() / 50]);
-    const double far =
-        std::min(options.max_depth_m, 1.25 * measured[measured.size() - 1 - measured.size() / 50]);
-    cv::Mat region;
-    const int k = 2 * options.ring_px + 1;
-    cv::dilate(key1.hole_mask != 0, region,
-               cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
-    std::vector<SweepView> views{{&key2, key1_from_key2}};
-    if (third.frame != nullptr) views.push_back({third.frame, third.key1_from_key3});
-    const PlaneSweepResult sweep =
-        SweepDepth(key1, views, camera, region, near, far, options.plane_sweep);
-    stereo = sweep.depth;
-    result.method = "plane sweep";
-  } else {
+  const PhotometricCheck photometric(key1, third, camera, options);
+  result.third_view_used = photometric.active();
+  std::vector<float> errors, errors_m;  // stereo vs sensor on measured pixels, over all methods
+  bool agrees = false;                  // some method agreed with the sensor
+  const bool sgbm = !forward && !options.plane_sweep_always;
+  if (sgbm) {
+    cv::Mat stereo = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
     // Stereo runs with the left camera of the pair first; when that is keyframe 2, its points are
     // moved into keyframe 1 with the known pose.
     SE3 key1_from_points;
@@ -302,96 +403,44 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
       if (cell == 0.f || p.z() < cell) cell = static_cast<float>(p.z());
     }
     result.method = "rectified SGBM";
+    stereo.copyTo(result.stereo_depth);
+    agrees = ValidateAndFill(stereo, key1, photometric, options, &result, &errors, &errors_m);
   }
-
-  // Block matching spreads a textured surface's depth over the textureless pixels next to it
-  // (foreground fattening); drop stereo depth within edge_margin_px of a depth discontinuity.
-  if (options.edge_margin_px > 0) {
-    cv::Mat edges = cv::Mat::zeros(stereo.size(), CV_8UC1);
-    for (int y = 0; y + 1 < stereo.rows; ++y)
-      for (int x = 0; x + 1 < stereo.cols; ++x) {
-        const float s = stereo.at<float>(y, x);
-        for (float n : {stereo.at<float>(y, x + 1), stereo.at<float>(y + 1, x)})
-          if (s > 0 && n > 0 && std::abs(s - n) > options.edge_jump * std::min(s, n))
-            edges.at<uint8_t>(y, x) = 255;
-      }
-    const int k = 2 * options.edge_margin_px + 1;
-    cv::dilate(edges, edges, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
-    stereo.setTo(0.f, edges);
-  }
-
-  // Validation against the sensor: over the image, and in a ring around each hole.
-  std::vector<float> all_errors, all_errors_m;
-  cv::Mat not_hole = key1.hole_mask == 0;
-  cv::Mat distance, labels;
-  cv::distanceTransform(not_hole, distance, labels, cv::DIST_L2, 3, cv::DIST_LABEL_CCOMP);
-  double max_label = 0;
-  cv::minMaxLoc(labels, nullptr, &max_label);
-  std::vector<std::vector<float>> ring_errors(static_cast<size_t>(max_label) + 1);
-  std::vector<std::vector<float>> ring_ratios(ring_errors.size());  // sensor / stereo
-  for (int y = 0; y < stereo.rows; ++y) {
-    for (int x = 0; x < stereo.cols; ++x) {
-      const float s = stereo.at<float>(y, x), k = key1.depth.at<float>(y, x);
-      if (!(s > 0) || !(k > 0)) continue;
-      const float e = std::abs(s - k) / k;
-      all_errors.push_back(e);
-      all_errors_m.push_back(std::abs(s - k));
-      if (distance.at<float>(y, x) <= options.ring_px) {
-        ring_errors[labels.at<int>(y, x)].push_back(e);
-        ring_ratios[labels.at<int>(y, x)].push_back(k / s);
-      }
+  // Plane sweep: for forward pairs (rectification degenerates) or when asked for every pair, over
+  // the holes and a validation ring around them; after SGBM (plane_sweep_after_sgbm), over the
+  // hole pixels it left empty. Within the depth range the sensor measures in keyframe 1.
+  if (!sgbm || options.plane_sweep_after_sgbm) {
+    cv::Mat wanted = key1.hole_mask != 0;
+    if (sgbm) wanted &= result.fill_mask == 0;
+    const std::vector<float> measured = SortedDepthSample(key1.depth, 4);
+    if (measured.size() < 100 && !sgbm) {
+      result.termination = "keyframe has almost no measured depth";
+      return result;
+    }
+    if (!sgbm) result.method = "plane sweep";
+    if (measured.size() >= 100 && cv::countNonZero(wanted) > 0) {
+      const double near = std::max(options.min_depth_m, 0.8 * measured[measured.size() / 50]);
+      const double far = std::min(options.max_depth_m,
+                                  1.25 * measured[measured.size() - 1 - measured.size() / 50]);
+      cv::Mat region;
+      const int k = 2 * options.ring_px + 1;
+      cv::dilate(wanted, region, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+      std::vector<SweepView> views{{&key2, key1_from_key2}};
+      if (third.frame != nullptr) views.push_back({third.frame, third.key1_from_key3});
+      const PlaneSweepResult sweep =
+          SweepDepth(key1, views, camera, region, near, far, options.plane_sweep);
+      result.method = sgbm ? "rectified SGBM + plane sweep" : "plane sweep";
+      sweep.depth.copyTo(result.stereo_depth, result.stereo_depth == 0.f);
+      agrees |=
+          ValidateAndFill(sweep.depth, key1, photometric, options, &result, &errors, &errors_m);
     }
   }
-  result.stereo_error_median = all_errors.empty() ? 1.0 : Median(all_errors);
-  result.stereo_error_median_m = all_errors_m.empty() ? 0.0 : Median(all_errors_m);
-  if (all_errors.empty() || result.stereo_error_median > options.max_pair_error) {
+
+  result.stereo_error_median = errors.empty() ? 1.0 : Median(errors);
+  result.stereo_error_median_m = errors_m.empty() ? 0.0 : Median(errors_m);
+  if (!agrees) {
     result.termination = "stereo disagrees with the sensor (pose or matching)";
     return result;
-  }
-  // Per hole: the ring's median error decides; with ring_scale_correction the stereo depth is
-  // first scaled by the ring's median sensor/stereo ratio (a small pose error scales stereo depth
-  // locally), and the error left after that decides.
-  std::vector<uint8_t> accept(ring_errors.size(), 0);
-  std::vector<float> ring_median(ring_errors.size(), 1.f), ring_scale(ring_errors.size(), 1.f);
-  for (size_t l = 0; l < ring_errors.size(); ++l) {
-    if (static_cast<int>(ring_errors[l].size()) < options.min_ring_samples) continue;
-    if (options.ring_scale_correction) {
-      const float scale = Median(ring_ratios[l]);
-      std::vector<float> left;
-      for (float r : ring_ratios[l]) left.push_back(std::abs(r / scale - 1.f));
-      ring_median[l] = Median(left);
-      ring_scale[l] = scale;
-      accept[l] = ring_median[l] <= options.max_ring_error &&
-                  std::abs(scale - 1.f) <= options.max_ring_scale;
-    } else {
-      ring_median[l] = Median(ring_errors[l]);
-      accept[l] = ring_median[l] <= options.max_ring_error;
-    }
-  }
-  PhotometricCheck photometric(key1, third, camera, options);
-  result.third_view_used = photometric.active();
-  for (int y = 0; y < stereo.rows; ++y) {
-    for (int x = 0; x < stereo.cols; ++x) {
-      if (key1.hole_mask.at<uint8_t>(y, x) == 0) continue;  // measured: never overwritten
-      if (!(stereo.at<float>(y, x) > 0)) continue;
-      const int label = labels.at<int>(y, x);
-      const float s = stereo.at<float>(y, x) * ring_scale[label];
-      if (!accept[label]) {
-        ++result.rejected_by_ring;
-        continue;
-      }
-      const double agreement = photometric.Agreement(x, y, s);
-      if (agreement <= 0) {
-        ++result.rejected_by_photometry;
-        continue;
-      }
-      result.filled_depth.at<float>(y, x) = s;
-      result.fill_mask.at<uint8_t>(y, x) = 255;
-      result.source.at<uint8_t>(y, x) = static_cast<uint8_t>(DepthSource::kStereo);
-      const double ring = ring_median[label] / options.max_ring_error;
-      result.confidence.at<float>(y, x) = static_cast<float>(std::exp(-ring * ring) * agreement);
-      ++result.filled_pixels;
-    }
   }
   result.success = true;
   result.termination = "ok";

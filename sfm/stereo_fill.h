@@ -38,17 +38,21 @@ struct StereoFillOptions {
   double epipole_margin_px = 40;    // epipole this close to the image (or inside): forward motion
   bool plane_sweep_forward = true;  // forward motion: plane sweep (else the pair is skipped)
   bool plane_sweep_always = false;  // plane sweep for sideways pairs too (instead of SGBM)
+  bool plane_sweep_after_sgbm = true;  // sideways pairs: plane-sweep the holes SGBM left empty
   PlaneSweepOptions plane_sweep;
-  int num_disparities = 128;          // SGBM search range, pixels (multiple of 16)
-  int block_size = 5;                 // SGBM block, pixels (odd)
-  int uniqueness_ratio = 10;          // SGBM uniqueness, percent
-  int speckle_window = 100;           // SGBM speckle filter window, pixels
-  int speckle_range = 2;              // SGBM speckle range, disparity units
+  int num_disparities = 128;   // SGBM search range, pixels (multiple of 16)
+  double rectify_alpha = 0.0;  // cv::stereoRectify alpha: 0 crops to valid pixels, 1 keeps all
+  int block_size = 5;          // SGBM block, pixels (odd)
+  int uniqueness_ratio = 10;   // SGBM uniqueness, percent
+  int speckle_window = 100;    // SGBM speckle filter window, pixels
+  int speckle_range = 2;       // SGBM speckle range, disparity units
   double max_lr_difference_px = 1.0;  // left-right consistency, pixels
   double min_depth_m = 0.3;           // filled depths outside this range are dropped, metres
   double max_depth_m = 6.0;
   int ring_px = 6;                    // validation ring around each hole, pixels
   int min_ring_samples = 15;          // holes with fewer stereo/Kinect pairs in the ring stay empty
+  int ring_cell_px = 40;              // large holes are judged piecewise, by the ring in each cell
+                                      // of this size (0: whole holes only)
   double max_ring_error = 0.03;       // median relative error allowed in the ring
   bool ring_scale_correction = true;  // scale each hole's stereo by its ring's sensor/stereo ratio
   double max_ring_scale = 0.10;       // ... when that ratio is within 1 +- this
