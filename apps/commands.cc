@@ -91,7 +91,7 @@ void RegisterCommands(CLI::App& app) {
     cmd->add_flag("--no-fill", *no_fill, "track only: no stereo hole filling of keyframes");
     cmd->add_flag("--sweep-all", options->fill_options.stereo.plane_sweep_always,
                   "plane-sweep every keyframe pair (default: rectified SGBM for sideways pairs, "
-                  "plane sweep for forward ones)");
+                  "then the sweep over the holes it left; the sweep alone for forward ones)");
     cmd->callback([options, args, range, no_fill] {
       options->fill = !*no_fill;
       options->input = args->input;

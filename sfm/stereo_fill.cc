@@ -318,7 +318,8 @@ bool StereoFillOptions::Check(std::string* message) const {
   if (num_disparities < 16 || num_disparities % 16)
     return fail("num_disparities: positive multiple of 16");
   if (block_size < 1 || block_size % 2 == 0) return fail("block_size must be odd");
-  if (!(rectify_alpha >= -1 && rectify_alpha <= 1)) return fail("rectify_alpha: -1 (default) or 0..1");
+  if (!(rectify_alpha >= -1 && rectify_alpha <= 1))
+    return fail("rectify_alpha: -1 (default) or 0..1");
   if (!(max_lr_difference_px >= 0) || !(min_depth_m > 0) || !(max_depth_m > min_depth_m))
     return fail("need lr difference >= 0 and 0 < min_depth_m < max_depth_m");
   if (ring_px < 1 || min_ring_samples < 1 || ring_cell_px < 0 || !(max_ring_error > 0) ||
@@ -412,6 +413,9 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   if (!sgbm || options.plane_sweep_after_sgbm) {
     cv::Mat wanted = key1.hole_mask != 0;
     if (sgbm) wanted &= result.fill_mask == 0;
+    // Projector shadows lie at depth discontinuities by definition, where the sweep's windows
+    // carry the front surface's depth into the hole: left to SGBM unless asked for.
+    if (!options.sweep_shadows) wanted &= key1.hole_mask != static_cast<uint8_t>(HoleCode::kShadow);
     const std::vector<float> measured = SortedDepthSample(key1.depth, 4);
     if (measured.size() < 100 && !sgbm) {
       result.termination = "keyframe has almost no measured depth";

@@ -39,6 +39,7 @@ struct StereoFillOptions {
   bool plane_sweep_forward = true;  // forward motion: plane sweep (else the pair is skipped)
   bool plane_sweep_always = false;  // plane sweep for sideways pairs too (instead of SGBM)
   bool plane_sweep_after_sgbm = true;  // sideways pairs: plane-sweep the holes SGBM left empty
+  bool sweep_shadows = false;          // plane-sweep projector-shadow holes too
   PlaneSweepOptions plane_sweep;
   int num_disparities = 128;   // SGBM search range, pixels (multiple of 16)
   double rectify_alpha = 0.0;  // cv::stereoRectify alpha: 0 crops to valid pixels, 1 keeps all
