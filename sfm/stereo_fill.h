@@ -3,7 +3,8 @@
 // measure are still textured in colour).
 //
 // Steps: check the pair (baseline; epipole inside the image, i.e. mostly forward motion, goes to
-// the plane sweep of sfm/plane_sweep.h over the holes instead, with the third view when given),
+// the plane sweep of sfm/plane_sweep.h over the holes instead, with the third view when given;
+// after SGBM, the sweep also covers the holes SGBM left empty, validated separately),
 // rectify both colour images (cv::stereoRectify) with the pair's left camera first
 // (a mostly vertical baseline is transposed into a horizontal one), compute disparity with
 // cv::StereoSGBM in both directions (the right view's by mirroring the images) and keep pixels
