@@ -106,6 +106,7 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
   GF_CHECK(mask.type() == CV_8UC1 && mask.size() == key1.color.size(), "mask: CV_8U, image size");
+  GF_CHECK(mask.cols == camera.width && mask.rows == camera.height, "images: the camera's size");
   GF_CHECK(min_depth_m > 0 && max_depth_m > min_depth_m, "need 0 < min_depth < max_depth");
   PlaneSweepResult result;
   result.depth = cv::Mat::zeros(mask.size(), CV_32FC1);
@@ -128,9 +129,9 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
   // 0 and tracked by a coverage image instead. Correlation windows are weighted by keyframe 1's
   // coverage, so windows that cross its image border use the part inside. The sweep runs on
   // images shrunk by `downscale` (area averaging) with the camera matrix scaled to match.
-  const cv::Size work(size.width / options.downscale, size.height / options.downscale);
-  const double sx = static_cast<double>(work.width) / size.width,
-               sy = static_cast<double>(work.height) / size.height;
+  const double scale = 1.0 / options.downscale;
+  const Camera work_camera = camera.Scaled(scale);  // the working images' pinhole camera
+  const cv::Size work(work_camera.width, work_camera.height);
   const cv::Mat ones(size, CV_32F, cv::Scalar(1.f));
   const cv::Mat cover_full = undistort(ones, cv::INTER_NEAREST);
   cv::Mat cover1;
@@ -159,12 +160,7 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
     data.push_back({gray_cover, view_from_key1.RotationMatrix(), view_from_key1.translation()});
     max_baseline = std::max(max_baseline, view_from_key1.TranslationNorm());
   }
-  Eigen::Matrix3d k = camera.K();  // the working images' pinhole camera
-  k.row(0) *= sx;
-  k.row(1) *= sy;
-  k(0, 2) += 0.5 * sx - 0.5;
-  k(1, 2) += 0.5 * sy - 0.5;
-  const Eigen::Matrix3d k_inv = k.inverse();
+  const Eigen::Matrix3d k = work_camera.K(), k_inv = k.inverse();
 
   // Work on the bounding box of the region, widened by the window.
   const int half = options.window_px / 2;
@@ -284,7 +280,7 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
 
   // Accept, refine, and write back into keyframe 1's (distorted) pixel grid.
   cv::Mat depth_u(work, CV_32F, cv::Scalar(0.f)), score_u(work, CV_32F, cv::Scalar(0.f));
-  const double min_parallax = options.min_parallax_px * std::max(sx, sy);  // working pixels
+  const double min_parallax = options.min_parallax_px * scale;  // working pixels
   for (int y = 0; y < rows; ++y) {
     const uint8_t* r = region.ptr<uint8_t>(y + roi.y) + roi.x;
     const float* vi = var_i.ptr<float>(y);
@@ -334,8 +330,8 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
         const Eigen::Vector2d n = camera.UndistortPixel({x, y});
         u = Eigen::Vector2d(camera.fx * n.x() + camera.cx, camera.fy * n.y() + camera.cy);
       }
-      const int ux = static_cast<int>(std::lround((u.x() + 0.5) * sx - 0.5)),
-                uy = static_cast<int>(std::lround((u.y() + 0.5) * sy - 0.5));
+      const int ux = static_cast<int>(std::lround((u.x() + 0.5) * scale - 0.5)),
+                uy = static_cast<int>(std::lround((u.y() + 0.5) * scale - 0.5));
       if (ux < 0 || uy < 0 || ux >= work.width || uy >= work.height) continue;
       const float z = depth_u.at<float>(uy, ux);
       if (!(z > 0)) continue;
