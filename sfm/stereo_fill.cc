@@ -183,11 +183,28 @@ class PhotometricCheck {
   SE3 key3_from_key1_;
 };
 
+// Keyframe 1's holes for the ring validation: for every pixel, the distance to the nearest hole
+// pixel and that hole's label (connected component), computed once per keyframe.
+struct Holes {
+  cv::Mat distance;  // CV_32F pixels, 0 on holes
+  cv::Mat labels;    // CV_32S
+  size_t count = 0;  // labels are < count
+};
+
+Holes FindHoles(const cv::Mat& hole_mask) {
+  Holes h;
+  cv::distanceTransform(hole_mask == 0, h.distance, h.labels, cv::DIST_L2, 3, cv::DIST_LABEL_CCOMP);
+  double max_label = 0;
+  cv::minMaxLoc(h.labels, nullptr, &max_label);
+  h.count = static_cast<size_t>(max_label) + 1;
+  return h;
+}
+
 // Validates one stereo depth image (keyframe 1's pixels, 0 = none) against the sensor and fills
 // the hole pixels that pass and are still empty in *result. Appends the stereo-vs-sensor errors
 // (relative, metres) on measured pixels. False, filling nothing, when the stereo disagrees with
 // the sensor over the whole image (median error above max_pair_error).
-bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1,
+bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1, const Holes& holes_of,
                      const PhotometricCheck& photometric, const StereoFillOptions& options,
                      StereoFillResult* r, std::vector<float>* errors,
                      std::vector<float>* errors_m) {
@@ -211,18 +228,14 @@ bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1,
 
   // Validation against the sensor: over the image, and in a ring around each hole.
   std::vector<float> all_errors;
-  cv::Mat not_hole = key1.hole_mask == 0;
-  cv::Mat distance, labels;
-  cv::distanceTransform(not_hole, distance, labels, cv::DIST_L2, 3, cv::DIST_LABEL_CCOMP);
-  double max_label = 0;
-  cv::minMaxLoc(labels, nullptr, &max_label);
+  const cv::Mat& distance = holes_of.distance;
+  const cv::Mat& labels = holes_of.labels;
   // Ring statistics per hole, and per piece of a hole (the hole cut by a grid of ring_cell_px
   // cells): a piece with enough ring samples of its own is judged by them, others by the hole's.
   const int cell =
       options.ring_cell_px > 0 ? options.ring_cell_px : std::max(stereo.cols, stereo.rows);
   const int cells_x = (stereo.cols + cell - 1) / cell, cells_y = (stereo.rows + cell - 1) / cell;
-  const size_t holes = static_cast<size_t>(max_label) + 1,
-               cells = static_cast<size_t>(cells_x) * cells_y;
+  const size_t holes = holes_of.count, cells = static_cast<size_t>(cells_x) * cells_y;
   auto piece_of = [&](int x, int y, int label) {
     return holes + static_cast<size_t>(label) * cells + static_cast<size_t>(y / cell) * cells_x +
            x / cell;
@@ -318,8 +331,7 @@ bool StereoFillOptions::Check(std::string* message) const {
   if (num_disparities < 16 || num_disparities % 16)
     return fail("num_disparities: positive multiple of 16");
   if (block_size < 1 || block_size % 2 == 0) return fail("block_size must be odd");
-  if (!(rectify_alpha >= -1 && rectify_alpha <= 1))
-    return fail("rectify_alpha: -1 (default) or 0..1");
+  if (!(rectify_alpha >= -1 && rectify_alpha <= 1)) return fail("rectify_alpha must be in [-1, 1]");
   if (!(max_lr_difference_px >= 0) || !(min_depth_m > 0) || !(max_depth_m > min_depth_m))
     return fail("need lr difference >= 0 and 0 < min_depth_m < max_depth_m");
   if (ring_px < 1 || min_ring_samples < 1 || ring_cell_px < 0 || !(max_ring_error > 0) ||
@@ -374,6 +386,7 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     return result;
   }
   const PhotometricCheck photometric(key1, third, camera, options);
+  const Holes holes = FindHoles(key1.hole_mask);
   result.third_view_used = photometric.active();
   std::vector<float> errors, errors_m;  // stereo vs sensor on measured pixels, over all methods
   bool agrees = false;                  // some method agreed with the sensor
@@ -405,7 +418,8 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     }
     result.method = "rectified SGBM";
     stereo.copyTo(result.stereo_depth);
-    agrees = ValidateAndFill(stereo, key1, photometric, options, &result, &errors, &errors_m);
+    agrees =
+        ValidateAndFill(stereo, key1, holes, photometric, options, &result, &errors, &errors_m);
   }
   // Plane sweep: for forward pairs (rectification degenerates) or when asked for every pair, over
   // the holes and a validation ring around them; after SGBM (plane_sweep_after_sgbm), over the
@@ -435,8 +449,8 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
           SweepDepth(key1, views, camera, region, near, far, options.plane_sweep);
       result.method = sgbm ? "rectified SGBM + plane sweep" : "plane sweep";
       sweep.depth.copyTo(result.stereo_depth, result.stereo_depth == 0.f);
-      agrees |=
-          ValidateAndFill(sweep.depth, key1, photometric, options, &result, &errors, &errors_m);
+      agrees |= ValidateAndFill(sweep.depth, key1, holes, photometric, options, &result, &errors,
+                                &errors_m);
     }
   }
 
