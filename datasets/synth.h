@@ -79,7 +79,8 @@ SynthFrame RenderFrame(const Scene& scene, const Camera& camera, const SE3& worl
                        const KinectModelOptions& kinect, uint32_t seed, int frame_index);
 
 // The frame as a frame source delivers it: colour, and metric depth with its hole mask converted
-// from the raw disparity exactly as a recorded raw Kinect frame is (timestamps left to the caller).
+// from the raw disparity exactly as a recorded raw Kinect frame is, projector shadows classified
+// (timestamps left to the caller).
 RgbdFrame ToRgbdFrame(const SynthFrame& frame, int index);
 
 struct SynthSummary {

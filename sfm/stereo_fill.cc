@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -15,41 +14,14 @@
 namespace gf {
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-// Disparity (pixels, NaN = none) of `primary`'s pixels against `secondary`. SGBM wants the left
-// image first with disparities x_left - x_right >= 0; a right-hand primary is mirrored so that it
-// becomes the left one, and the result mirrored back.
-cv::Mat Disparity(const cv::Ptr<cv::StereoSGBM>& sgbm, const cv::Mat& primary,
-                  const cv::Mat& secondary, bool primary_is_left) {
-  cv::Mat a = primary, b = secondary;
-  if (!primary_is_left) {
-    cv::flip(primary, a, 1);
-    cv::flip(secondary, b, 1);
-  }
-  cv::Mat raw;
-  sgbm->compute(a, b, raw);
-  if (!primary_is_left) {
-    cv::Mat mirrored;
-    cv::flip(raw, mirrored, 1);
-    raw = mirrored;
-  }
-  cv::Mat d(raw.size(), CV_32F);
-  for (int y = 0; y < raw.rows; ++y)
-    for (int x = 0; x < raw.cols; ++x) {
-      const int16_t v = raw.at<int16_t>(y, x);
-      d.at<float>(y, x) = v > 0 ? v / 16.0f : kNaN;  // SGBM: fixed point, 4 fractional bits
-    }
-  return d;
-}
-
 // Dense stereo points in the `first` camera's frame for a pair in which `first` is the left camera
 // after rectification (the configuration SGBM's left image needs). Returns false, computing
 // nothing, when `first` is the right one. second_from_first maps first-camera points into the
-// second camera (OpenCV's R, T).
+// second camera (OpenCV's R, T). Disparities are searched for depths in [near_m, far_m] only.
 bool StereoPointsFromLeft(const cv::Mat& color_first, const cv::Mat& color_second,
-                          const Camera& camera, const SE3& second_from_first,
-                          const StereoFillOptions& options, std::vector<Eigen::Vector3d>* points) {
+                          const Camera& camera, const SE3& second_from_first, double near_m,
+                          double far_m, const StereoFillOptions& options,
+                          std::vector<Eigen::Vector3d>* points) {
   cv::Mat r(3, 3, CV_64F), t(3, 1, CV_64F);
   const Eigen::Matrix3d rot = second_from_first.RotationMatrix();
   for (int i = 0; i < 3; ++i) {
@@ -63,15 +35,16 @@ bool StereoPointsFromLeft(const cv::Mat& color_first, const cv::Mat& color_secon
   const bool vertical = std::abs(p2.at<double>(1, 3)) > std::abs(p2.at<double>(0, 3));
   const double shift = vertical ? p2.at<double>(1, 3) : p2.at<double>(0, 3);  // -f * baseline
   if (shift >= 0) return false;  // `first` is the right camera: the caller swaps the pair
-  cv::Mat map1x, map1y, map2x, map2y, gray1, gray2, rect1, rect2;
-  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r1, p1, size, CV_32FC1, map1x,
-                              map1y);
-  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r2, p2, size, CV_32FC1, map2x,
-                              map2y);
+  const double fb = -shift;      // f * baseline: disparity = fb / depth
+  cv::Mat map1, map1_fraction, map2, map2_fraction, gray1, gray2, rect1, rect2;
+  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r1, p1, size, CV_16SC2, map1,
+                              map1_fraction);
+  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r2, p2, size, CV_16SC2, map2,
+                              map2_fraction);
   cv::cvtColor(color_first, gray1, cv::COLOR_BGR2GRAY);
   cv::cvtColor(color_second, gray2, cv::COLOR_BGR2GRAY);
-  cv::remap(gray1, rect1, map1x, map1y, cv::INTER_LINEAR);
-  cv::remap(gray2, rect2, map2x, map2y, cv::INTER_LINEAR);
+  cv::remap(gray1, rect1, map1, map1_fraction, cv::INTER_LINEAR);
+  cv::remap(gray2, rect2, map2, map2_fraction, cv::INTER_LINEAR);
   if (vertical) {  // make epipolar lines horizontal
     cv::Mat t1, t2;
     cv::transpose(rect1, t1);
@@ -79,39 +52,35 @@ bool StereoPointsFromLeft(const cv::Mat& color_first, const cv::Mat& color_secon
     rect1 = t1;
     rect2 = t2;
   }
+  // The search range covers the depth range (a pixel's depth in the rectified camera differs from
+  // keyframe 1's by the rectifying rotation; the caller's range has a margin for that), at most
+  // num_disparities.
+  const int min_disparity = std::max(0, static_cast<int>(std::floor(fb / far_m)) - 1);
+  const int wanted = static_cast<int>(std::ceil(fb / near_m)) + 1 - min_disparity;
+  const int num_disparities = std::clamp((wanted + 15) / 16 * 16, 16, options.num_disparities);
   const int bs = options.block_size;
+  // SGBM's own left-right check (disp12MaxDiff) computes the right view's disparities from the
+  // same cost volume and drops pixels where the two disagree.
   cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
-      0, options.num_disparities, bs, 8 * bs * bs, 32 * bs * bs, 1, 63, options.uniqueness_ratio,
+      min_disparity, num_disparities, bs, 8 * bs * bs, 32 * bs * bs,
+      static_cast<int>(std::lround(options.max_lr_difference_px)), 63, options.uniqueness_ratio,
       options.speckle_window, options.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
-  cv::Mat d1 = Disparity(sgbm, rect1, rect2, true);
-  const cv::Mat d2 = Disparity(sgbm, rect2, rect1, false);
-  // Left-right consistency: the right view must see the same disparity at the matching pixel.
-  for (int y = 0; y < d1.rows; ++y) {
-    for (int x = 0; x < d1.cols; ++x) {
-      float& d = d1.at<float>(y, x);
-      if (std::isnan(d)) continue;
-      const int x2 = static_cast<int>(std::lround(x - d));
-      const float back = (x2 >= 0 && x2 < d2.cols) ? d2.at<float>(y, x2) : kNaN;
-      if (std::isnan(back) || std::abs(back - d) > options.max_lr_difference_px) d = kNaN;
-    }
-  }
-  if (vertical) {
-    cv::Mat back;
-    cv::transpose(d1, back);
-    d1 = back;
-  }
+  cv::Mat raw;  // CV_16S, 4 fractional bits; invalid pixels are below min_disparity
+  sgbm->compute(rect1, rect2, raw);
   const double f = p1.at<double>(0, 0), rcx = p1.at<double>(0, 2), rcy = p1.at<double>(1, 2);
-  const double fb = -shift;  // f * baseline
   Eigen::Matrix3d r1_eigen;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) r1_eigen(i, j) = r1.at<double>(i, j);
   const Eigen::Matrix3d first_from_rect = r1_eigen.transpose();
+  const int16_t lowest = static_cast<int16_t>(std::max(1, 16 * min_disparity));
   points->clear();
-  for (int v = 0; v < d1.rows; ++v) {
-    for (int u = 0; u < d1.cols; ++u) {
-      const float d = d1.at<float>(v, u);
-      if (std::isnan(d) || d <= 0) continue;
-      const double z = fb / d;
+  points->reserve(static_cast<size_t>(raw.total()) / 2);
+  for (int row = 0; row < raw.rows; ++row) {
+    const int16_t* d = raw.ptr<int16_t>(row);
+    for (int col = 0; col < raw.cols; ++col) {
+      if (d[col] < lowest) continue;
+      const double z = 16.0 * fb / d[col];
+      const int u = vertical ? row : col, v = vertical ? col : row;  // rectified pixel
       points->push_back(first_from_rect * Eigen::Vector3d((u - rcx) * z / f, (v - rcy) * z / f, z));
     }
   }
@@ -281,9 +250,21 @@ bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1, const Hole
       accept[l] = ring_median[l] <= options.max_ring_error;
     }
   }
+  const uint8_t shadow = static_cast<uint8_t>(HoleCode::kShadow);
   for (int y = 0; y < stereo.rows; ++y) {
+    const uint8_t* hole_row = key1.hole_mask.ptr<uint8_t>(y);
+    const float* depth_row = key1.depth.ptr<float>(y);
+    float shadow_near = 0, shadow_far = 0;  // the sensor's depths on either side of a shadow run
     for (int x = 0; x < stereo.cols; ++x) {
-      if (key1.hole_mask.at<uint8_t>(y, x) == 0) continue;  // measured: never overwritten
+      if (hole_row[x] == 0) continue;  // measured: never overwritten
+      if (hole_row[x] == shadow && (x == 0 || hole_row[x - 1] != shadow)) {
+        int end = x;
+        while (end < stereo.cols && hole_row[end] == shadow) ++end;
+        const float left = x > 0 ? depth_row[x - 1] : 0.f;
+        const float right = end < stereo.cols ? depth_row[end] : 0.f;
+        shadow_near = std::min(left, right);
+        shadow_far = std::max(left, right);
+      }
       if (result.fill_mask.at<uint8_t>(y, x)) continue;     // filled by an earlier method
       if (!(stereo.at<float>(y, x) > 0)) continue;
       const int hole = labels.at<int>(y, x);
@@ -293,6 +274,14 @@ bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1, const Hole
       const float s = stereo.at<float>(y, x) * ring_scale[label];
       if (!accept[label]) {
         ++result.rejected_by_ring;
+        continue;
+      }
+      // A projector shadow is the far surface hidden from the projector by the near one: stereo
+      // depth nearer the near side is the near surface spread over the shadow (block matching's
+      // foreground fattening, occluded in one view).
+      if (hole_row[x] == shadow && shadow_near > 0 &&
+          std::abs(s - shadow_near) <= std::abs(s - shadow_far)) {
+        ++result.rejected_by_occlusion;
         continue;
       }
       const double agreement = photometric.Agreement(x, y, s);
@@ -348,10 +337,10 @@ std::string StereoFillResult::BriefReport() const {
   std::snprintf(
       buffer, sizeof(buffer),
       "stereo fill (%s) %s: %d of %d hole pixels filled (%.1f%%), stereo vs sensor median "
-      "error %.2f%% (%.1f mm); rejected by ring %d, by %s %d",
+      "error %.2f%% (%.1f mm); rejected by ring %d, by shadow geometry %d, by %s %d",
       method.c_str(), termination.c_str(), filled_pixels, hole_pixels,
       hole_pixels ? 100.0 * filled_pixels / hole_pixels : 0.0, 100.0 * stereo_error_median,
-      1000.0 * stereo_error_median_m, rejected_by_ring,
+      1000.0 * stereo_error_median_m, rejected_by_ring, rejected_by_occlusion,
       third_view_used ? "third view" : "(no third view)", rejected_by_photometry);
   return buffer;
 }
@@ -391,16 +380,27 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   std::vector<float> errors, errors_m;  // stereo vs sensor on measured pixels, over all methods
   bool agrees = false;                  // some method agreed with the sensor
   const bool sgbm = !forward && !options.plane_sweep_always;
+  // The depth range that stereo searches: what the sensor measures in keyframe 1 (2nd to 98th
+  // percentile), widened by a quarter, within [min_depth_m, max_depth_m].
+  const std::vector<float> measured = SortedDepthSample(key1.depth, 4);
+  if (measured.size() < 100) {
+    result.termination = "keyframe has almost no measured depth";
+    return result;
+  }
+  const double near = std::max(options.min_depth_m, 0.8 * measured[measured.size() / 50]);
+  const double far =
+      std::min(options.max_depth_m, 1.25 * measured[measured.size() - 1 - measured.size() / 50]);
   if (sgbm) {
     cv::Mat stereo = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
     // Stereo runs with the left camera of the pair first; when that is keyframe 2, its points are
     // moved into keyframe 1 with the known pose.
     SE3 key1_from_points;
     std::vector<Eigen::Vector3d> points;
-    if (!StereoPointsFromLeft(key1.color, key2.color, camera, key1_from_key2.Inverse(), options,
-                              &points)) {
+    if (!StereoPointsFromLeft(key1.color, key2.color, camera, key1_from_key2.Inverse(), near, far,
+                              options, &points)) {
       key1_from_points = key1_from_key2;
-      if (!StereoPointsFromLeft(key2.color, key1.color, camera, key1_from_key2, options, &points)) {
+      if (!StereoPointsFromLeft(key2.color, key1.color, camera, key1_from_key2, near, far, options,
+                                &points)) {
         result.termination = "rectification failed";
         return result;
       }
@@ -430,16 +430,8 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     // Projector shadows lie at depth discontinuities by definition, where the sweep's windows
     // carry the front surface's depth into the hole: left to SGBM unless asked for.
     if (!options.sweep_shadows) wanted &= key1.hole_mask != static_cast<uint8_t>(HoleCode::kShadow);
-    const std::vector<float> measured = SortedDepthSample(key1.depth, 4);
-    if (measured.size() < 100 && !sgbm) {
-      result.termination = "keyframe has almost no measured depth";
-      return result;
-    }
     if (!sgbm) result.method = "plane sweep";
-    if (measured.size() >= 100 && cv::countNonZero(wanted) > 0) {
-      const double near = std::max(options.min_depth_m, 0.8 * measured[measured.size() / 50]);
-      const double far = std::min(options.max_depth_m,
-                                  1.25 * measured[measured.size() - 1 - measured.size() / 50]);
+    if (cv::countNonZero(wanted) > 0) {
       cv::Mat region;
       const int k = 2 * options.ring_px + 1;
       cv::dilate(wanted, region, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));

@@ -7,11 +7,12 @@
 // after SGBM, the sweep also covers the holes SGBM left empty, validated separately),
 // rectify both colour images (cv::stereoRectify) with the pair's left camera first
 // (a mostly vertical baseline is transposed into a horizontal one), compute disparity with
-// cv::StereoSGBM in both directions (the right view's by mirroring the images) and keep pixels
-// that agree (left-right check), convert to metric depth in the left camera, move it into
-// keyframe 1 with the known pose and project it into keyframe 1's image (z-buffer), then validate:
-// the stereo depth must agree with the Kinect on measured pixels around each hole, or that hole is
-// left empty. Where a third keyframe sees the filled point, its colour there must match keyframe
+// cv::StereoSGBM over the disparities of keyframe 1's measured depth range, keeping pixels whose
+// right-view disparity agrees (SGBM's left-right check), convert to metric depth in the left
+// camera, move it into keyframe 1 with the known pose and project it into keyframe 1's image
+// (z-buffer), then validate: the stereo depth must agree with the Kinect on measured pixels around
+// each hole, or that hole is left empty. In a projector shadow the depth must lie nearer the
+// shadow's far side than its near one (the shadow is the far surface). Where a third keyframe sees the filled point, its colour there must match keyframe
 // 1's (normalised cross-correlation of small patches), unless the third keyframe's sensor shows the
 // point hidden behind a nearer surface. Only pixels the sensor left empty are filled; measured
 // pixels are never changed. Each filled pixel carries a confidence and a source tag.
@@ -42,13 +43,15 @@ struct StereoFillOptions {
   bool plane_sweep_after_sgbm = true;  // sideways pairs: plane-sweep the holes SGBM left empty
   bool sweep_shadows = false;          // plane-sweep projector-shadow holes too
   PlaneSweepOptions plane_sweep;
-  int num_disparities = 128;   // SGBM search range, pixels (multiple of 16)
+  int num_disparities = 128;   // most disparities SGBM searches (multiple of 16); the range
+                               // itself follows keyframe 1's depth range
   double rectify_alpha = 0.0;  // cv::stereoRectify alpha: 0 crops to valid pixels, 1 keeps all
   int block_size = 5;          // SGBM block, pixels (odd)
   int uniqueness_ratio = 10;   // SGBM uniqueness, percent
   int speckle_window = 100;    // SGBM speckle filter window, pixels
   int speckle_range = 2;       // SGBM speckle range, disparity units
-  double max_lr_difference_px = 1.0;  // left-right consistency, pixels
+  double max_lr_difference_px = 1.0;  // left-right consistency, pixels (rounded: SGBM's
+                                      // disp12MaxDiff)
   double min_depth_m = 0.3;           // filled depths outside this range are dropped, metres
   double max_depth_m = 6.0;
   int ring_px = 6;                    // validation ring around each hole, pixels
@@ -93,6 +96,7 @@ struct StereoFillResult {
   int filled_pixels = 0;
   int rejected_by_ring = 0;        // hole pixels with stereo depth whose hole failed the ring test
   int rejected_by_photometry = 0;  // ... that the third view contradicted
+  int rejected_by_occlusion = 0;   // ... in projector shadows, nearer the shadow's near side
   bool third_view_used = false;
   double stereo_error_median = 0;    // relative, stereo vs Kinect where both exist
   double stereo_error_median_m = 0;  // the same in metres

@@ -97,22 +97,23 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   EXPECT_EQ(cv::norm(r.filled_depth, a.frame.depth, cv::NORM_INF, measured), 0.0);
   EXPECT_EQ(cv::countNonZero(r.fill_mask & measured), 0);
   const FillScore s = Score(a, r);
-  // Measured on this pair: 87% filled, median error 0.4%, 90th percentile 1.5%.
-  EXPECT_GT(s.fill_rate, 0.8);
+  // Measured on this pair: 92% filled, median error 0.45%, 90th percentile 1.5%.
+  EXPECT_GT(s.fill_rate, 0.85);
   EXPECT_LT(Percentile(s.errors, 0.5), 0.01);
   EXPECT_LT(Percentile(s.errors, 0.9), 0.03);
-  // The goal is none; measured 29 of 1120 filled clear-glass pixels (2.6%) take the depth of the
+  // The goal is none; measured 13 of 1063 filled clear-glass pixels (1.2%) take the depth of the
   // glass instead of the background behind it, next to the bottle's printed label (block
   // matching spreads the label's depth). This bound guards against regressions meanwhile.
   EXPECT_LE(s.clear_glass_as_glass, s.clear_glass_filled / 20);
 
   // The default: SGBM, then the plane sweep (with a third keyframe, as in the pipeline) over the
-  // holes SGBM left empty. Fills more; the sweep's larger windows carry foreground depth into
-  // thin holes along the table's silhouette (the 90th percentile, reported, not bounded here).
+  // holes SGBM left empty. Fills more than SGBM alone with the same third view.
+  const ThirdView third{&c.frame, poses[10].Inverse() * poses[4]};
+  const StereoFillResult r3 = FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, sgbm_only,
+                                                third);
   const auto start = std::chrono::steady_clock::now();
   const StereoFillResult d =
-      FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, StereoFillOptions{},
-                        {&c.frame, poses[10].Inverse() * poses[4]});
+      FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, StereoFillOptions{}, third);
   std::printf(
       "fill took %.0f ms\n",
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
@@ -120,9 +121,12 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   EXPECT_EQ(d.method, "rectified SGBM + plane sweep");
   EXPECT_EQ(cv::norm(d.filled_depth, a.frame.depth, cv::NORM_INF, measured), 0.0);
   const FillScore sd = Score(a, d);
-  EXPECT_GT(d.filled_pixels, r.filled_pixels);
+  EXPECT_GT(d.filled_pixels, r3.filled_pixels) << r3.BriefReport();
+  // Measured: 63% of all hole pixels filled (90% of the glossy, dark and textured-glass ones),
+  // median error 0.46%, 90th percentile 1.7%.
+  EXPECT_GT(sd.fill_rate, 0.85);
   EXPECT_LT(Percentile(sd.errors, 0.5), 0.01);
-  EXPECT_LT(Percentile(sd.errors, 0.8), 0.03);
+  EXPECT_LT(Percentile(sd.errors, 0.9), 0.03);
   EXPECT_LE(sd.clear_glass_as_glass, sd.clear_glass_filled / 20);
 }
 
