@@ -5,6 +5,8 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <malloc.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
@@ -13,6 +15,12 @@
 #include "apps/commands.h"
 
 int main(int argc, char** argv) {
+  // Every keyframe pair allocates and frees tens of megabytes (images, cost volumes). glibc would
+  // hand blocks above its mmap threshold back to the kernel on free and fault them in again on the
+  // next pair; keeping freed memory in the heap instead cut the one-core stereo time of an ICL pair
+  // from 160 to 112 ms on our 2-core VM. The process keeps its peak heap.
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest allowed threshold (64-bit)
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
   // stdout carries results (JSON for info); logs go to stderr.
   spdlog::set_default_logger(spdlog::stderr_color_mt("glassfusion"));
   spdlog::set_pattern("[%l] %v");
