@@ -6,7 +6,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
 #include <thread>
@@ -16,6 +19,8 @@
 #include "acquisition/trajectory_metrics.h"
 #include "apps/progress.h"
 #include "registration/tracker.h"
+#include "sfm/keyframe_pairs.h"
+#include "sfm/stereo_fill.h"
 
 namespace fs = std::filesystem;
 
@@ -57,11 +62,108 @@ Eigen::Matrix4d ToEigen(const cv::Mat& m) {
   return e;
 }
 
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// OpenCV's StereoSGBM alone on a rectified pair (the dense-stereo step without our range, checks
+// and validation): 128 disparities, the block size of StereoFillOptions. Returns milliseconds.
+double TimeOpenCvSgbm(const RgbdFrame& a, const RgbdFrame& b, const Camera& camera,
+                      const SE3& b_from_a) {
+  const auto t0 = Clock::now();
+  cv::Mat r, t, r1, r2, p1, p2, q;
+  cv::eigen2cv(b_from_a.RotationMatrix(), r);
+  cv::eigen2cv(Eigen::Vector3d(b_from_a.translation()), t);
+  const cv::Size size(camera.width, camera.height);
+  cv::stereoRectify(camera.CvK(), camera.CvDistortion(), camera.CvK(), camera.CvDistortion(), size,
+                    r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, 0, size);
+  cv::Mat gray_a, gray_b, map_x, map_y, rect_a, rect_b, disparity;
+  cv::cvtColor(a.color, gray_a, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(b.color, gray_b, cv::COLOR_BGR2GRAY);
+  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r1, p1, size, CV_16SC2, map_x,
+                              map_y);
+  cv::remap(gray_a, rect_a, map_x, map_y, cv::INTER_LINEAR);
+  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r2, p2, size, CV_16SC2, map_x,
+                              map_y);
+  cv::remap(gray_b, rect_b, map_x, map_y, cv::INTER_LINEAR);
+  const int bs = StereoFillOptions{}.block_size;
+  cv::StereoSGBM::create(0, 128, bs, 8 * bs * bs, 32 * bs * bs, 1, 63, 10, 100, 2,
+                         cv::StereoSGBM::MODE_SGBM_3WAY)
+      ->compute(rect_a, rect_b, disparity);
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// Stereo hole filling per keyframe pair on one core (see BenchOptions::fill_every).
+nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
+                                       const Trajectory& tracked, const Camera& camera,
+                                       const BenchOptions& options) {
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);
+  KeyframePairScheduler scheduler(camera, PairSelectionOptions{});
+  std::vector<double> pair_ms, fill_ms, sgbm_ms;
+  long long holes = 0, filled = 0;
+  int unpaired = 0;
+  std::map<std::string, int> methods;
+  auto process = [&](const StereoJob& job) {
+    if (!job.key2) {
+      ++unpaired;
+      return;
+    }
+    const SE3& key1_from_key2 = job.choice.partner_pose.key1_from_key2;
+    ThirdView third;
+    if (job.third) third = {&job.third->frame, job.choice.third_pose.key1_from_key2};
+    const auto t0 = Clock::now();
+    const StereoFillResult r = FillHolesByStereo(job.key1->frame, job.key2->frame, camera,
+                                                 key1_from_key2, StereoFillOptions{}, third);
+    fill_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    holes += r.hole_pixels;
+    filled += r.filled_pixels;
+    ++methods[r.method.empty() ? r.termination : r.method];
+    const double margin = StereoFillOptions{}.epipole_margin_px;
+    if (!EpipoleInsideImage(camera, key1_from_key2, margin) &&
+        !EpipoleInsideImage(camera, key1_from_key2.Inverse(), margin))
+      sgbm_ms.push_back(
+          TimeOpenCvSgbm(job.key1->frame, job.key2->frame, camera, key1_from_key2.Inverse()));
+  };
+  const int keyframes = (static_cast<int>(frames.size()) + options.fill_every - 1) / options.fill_every;
+  TerminalProgress progress("bench: stereo fill", keyframes);
+  for (int i = 0, k = 0; i < static_cast<int>(frames.size()); i += options.fill_every, ++k) {
+    const auto t0 = Clock::now();
+    const std::vector<StereoJob> jobs = scheduler.Add(frames[i], tracked[i].world_from_camera);
+    pair_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    for (const StereoJob& job : jobs) process(job);
+    progress.Update(k + 1);
+  }
+  for (const StereoJob& job : scheduler.Flush()) process(job);
+  cv::setNumThreads(threads);
+  nlohmann::ordered_json j;
+  j["keyframe_every"] = options.fill_every;
+  j["threads"] = 1;
+  j["keyframes"] = keyframes;
+  j["pairs"] = fill_ms.size();
+  j["unpaired_keyframes"] = unpaired;
+  j["pair_selection_median_ms"] = Median(pair_ms);  // features, matching, pose refinement
+  j["median_ms"] = Median(fill_ms);                 // FillHolesByStereo
+  j["max_ms"] = fill_ms.empty() ? 0.0 : *std::max_element(fill_ms.begin(), fill_ms.end());
+  j["fill_rate"] = holes ? static_cast<double>(filled) / holes : 0.0;
+  j["methods"] = methods;
+  j["opencv_sgbm_pairs"] = sgbm_ms.size();
+  j["opencv_sgbm_median_ms"] =
+      sgbm_ms.empty() ? nlohmann::json(nullptr) : nlohmann::json(Median(sgbm_ms));
+  return j;
+}
+
 }  // namespace
 
 bool BenchOptions::Check(std::string* message) const {
   if (input.empty() || first_frame < 0 || (end_frame >= 0 && end_frame <= first_frame)) {
     if (message) *message = "need INPUT and 0 <= A < B in --frames A:B";
+    return false;
+  }
+  if (fill_every < 0) {
+    if (message) *message = "need --fill-every >= 0";
     return false;
   }
   return source.Check(message);
@@ -109,6 +211,9 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
     }
     results.push_back(std::move(ours));
   }
+  nlohmann::ordered_json stereo_fill;
+  if (options.fill_every > 0)
+    stereo_fill = BenchStereoFill(frames, results.front().trajectory, camera, options);
 
   if (options.peers) {
     cv::Mat k;
@@ -160,6 +265,7 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   out["methods"] = nlohmann::json::array();
   for (const MethodResult& m : results)
     out["methods"].push_back(Summarise(m, gt.empty() ? nullptr : &gt));
+  if (!stereo_fill.is_null()) out["stereo_fill"] = stereo_fill;
   return out;
 }
 

@@ -7,6 +7,10 @@
 // run frame-to-frame with their default parameters and our camera matrix, chaining
 // world_from_current = world_from_previous * Rt^-1 (OpenCV's Rt maps source points to the
 // destination frame). A peer that fails on a frame keeps its previous pose there, as ours does.
+//
+// With fill_every, pair selection (sfm/keyframe_pairs.h) and FillHolesByStereo (sfm/stereo_fill.h),
+// default options, are timed per keyframe with OpenCV held to one thread: the "time per keyframe
+// pair on one core" figure.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -22,6 +26,10 @@ struct BenchOptions {
   int first_frame = 0;
   int end_frame = -1;
   bool peers = true;  // also run the OpenCV odometry peers
+  // > 0: also time stereo hole filling on one core, with every fill_every-th frame a keyframe,
+  // paired and filled as reconstruct does (KeyframePairScheduler, then FillHolesByStereo) with our
+  // tracked poses; next to OpenCV's StereoSGBM alone on the same rectified sideways pairs.
+  int fill_every = 0;
   FrameSourceOptions source;
   bool Check(std::string* message = nullptr) const;
 };

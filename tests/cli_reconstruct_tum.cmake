@@ -40,5 +40,19 @@ execute_process(COMMAND "${GLASSFUSION}" bench "${input}" --frames 0:10
 if(NOT rc EQUAL 0 OR NOT bench_out MATCHES "opencv RgbdICPOdometry" OR NOT bench_out MATCHES "cores")
   message(FATAL_ERROR "bench failed (${rc}): ${err} ${bench_out}")
 endif()
+# Stereo fill timed on one core as reconstruct pairs and fills keyframes (every 2nd frame here).
+execute_process(COMMAND "${GLASSFUSION}" bench "${input}" --frames 0:40 --no-peers --fill-every 2
+                RESULT_VARIABLE rc OUTPUT_VARIABLE bench_out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT bench_out MATCHES
+   "stereo fill, one core: ([0-9]+) pairs, median ([0-9.]+) ms/pair[^\n]*, ([0-9.]+)% of hole")
+  message(FATAL_ERROR "bench --fill-every failed (${rc}): ${err} ${bench_out}")
+endif()
+set(fill_pairs ${CMAKE_MATCH_1})
+set(fill_ms ${CMAKE_MATCH_2})
+set(fill_percent ${CMAKE_MATCH_3})
+if(fill_pairs LESS 3 OR NOT fill_percent GREATER 5)
+  message(FATAL_ERROR "bench stereo fill: ${fill_pairs} pairs, ${fill_percent}% filled: ${bench_out}")
+endif()
 file(REMOVE_RECURSE "${out}")
-message("reconstruct ok: 40 frames, ATE ${ate} m, tracking median ${track_ms} ms")
+message("reconstruct ok: 40 frames, ATE ${ate} m, tracking median ${track_ms} ms; stereo fill "
+        "${fill_ms} ms/pair on one core over ${fill_pairs} pairs, ${fill_percent}% filled")
