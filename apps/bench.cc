@@ -127,7 +127,8 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
       sgbm_ms.push_back(
           TimeOpenCvSgbm(job.key1->frame, job.key2->frame, camera, key1_from_key2.Inverse()));
   };
-  const int keyframes = (static_cast<int>(frames.size()) + options.fill_every - 1) / options.fill_every;
+  const int keyframes =
+      (static_cast<int>(frames.size()) + options.fill_every - 1) / options.fill_every;
   TerminalProgress progress("bench: stereo fill", keyframes);
   for (int i = 0, k = 0; i < static_cast<int>(frames.size()); i += options.fill_every, ++k) {
     const auto t0 = Clock::now();

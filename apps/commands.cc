@@ -114,9 +114,10 @@ void RegisterCommands(CLI::App& app) {
     cmd->add_option("--frames", *range, "frame range A:B");
     cmd->add_option("--gt", options->gt, "ground truth (default: INPUT/groundtruth.txt or .log)");
     cmd->add_flag("--no-peers", *no_peers, "time GlassFusion only");
-    cmd->add_option("--fill-every", options->fill_every,
-                    "also time stereo hole filling on one core, every K-th frame a keyframe, paired "
-                    "and filled as reconstruct does with the tracked poses (0: off)");
+    cmd->add_option(
+        "--fill-every", options->fill_every,
+        "also time stereo hole filling on one core, every K-th frame a keyframe, paired "
+        "and filled as reconstruct does with the tracked poses (0: off)");
     cmd->callback([options, args, range, no_peers] {
       options->input = args->input;
       options->source = args->ToOptions();
@@ -135,16 +136,16 @@ void RegisterCommands(CLI::App& app) {
       }
       if (j.contains("stereo_fill") && j["stereo_fill"]["pairs"].get<int>() > 0) {
         const auto& f = j["stereo_fill"];
-        std::printf("stereo fill, one core: %d pairs, median %.1f ms/pair (max %.1f) after "
-                    "%.1f ms pair selection, %.1f%% of hole pixels filled; OpenCV StereoSGBM "
-                    "alone: %s ms on %d sideways pairs\n",
-                    f["pairs"].get<int>(), f["median_ms"].get<double>(),
-                    f["max_ms"].get<double>(), f["pair_selection_median_ms"].get<double>(),
-                    100.0 * f["fill_rate"].get<double>(),
-                    f["opencv_sgbm_median_ms"].is_null()
-                        ? "-"
-                        : std::to_string(f["opencv_sgbm_median_ms"].get<double>()).substr(0, 6).c_str(),
-                    f["opencv_sgbm_pairs"].get<int>());
+        std::printf(
+            "stereo fill, one core: %d pairs, median %.1f ms/pair (max %.1f) after "
+            "%.1f ms pair selection, %.1f%% of hole pixels filled; OpenCV StereoSGBM "
+            "alone: %s ms on %d sideways pairs\n",
+            f["pairs"].get<int>(), f["median_ms"].get<double>(), f["max_ms"].get<double>(),
+            f["pair_selection_median_ms"].get<double>(), 100.0 * f["fill_rate"].get<double>(),
+            f["opencv_sgbm_median_ms"].is_null()
+                ? "-"
+                : std::to_string(f["opencv_sgbm_median_ms"].get<double>()).substr(0, 6).c_str(),
+            f["opencv_sgbm_pairs"].get<int>());
       }
       std::printf("%d frames, %u cores\n", j["frames"].get<int>(), j["cores"].get<unsigned>());
       std::cout << j.dump(2) << std::endl;

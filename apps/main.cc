@@ -2,10 +2,9 @@
 //
 // Exit codes: 0 success, 1 internal error, 2 bad input or usage (one line "error: <file>:
 // <problem>").
+#include <malloc.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
-
-#include <malloc.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>

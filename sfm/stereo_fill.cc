@@ -265,7 +265,7 @@ bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1, const Hole
         shadow_near = std::min(left, right);
         shadow_far = std::max(left, right);
       }
-      if (result.fill_mask.at<uint8_t>(y, x)) continue;     // filled by an earlier method
+      if (result.fill_mask.at<uint8_t>(y, x)) continue;  // filled by an earlier method
       if (!(stereo.at<float>(y, x) > 0)) continue;
       const int hole = labels.at<int>(y, x);
       const size_t piece = piece_of(x, y, hole);
@@ -281,7 +281,7 @@ bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1, const Hole
       // foreground fattening, occluded in one view).
       if (hole_row[x] == shadow && shadow_near > 0 &&
           std::abs(s - shadow_near) <= std::abs(s - shadow_far)) {
-        ++result.rejected_by_occlusion;
+        ++result.rejected_by_shadow;
         continue;
       }
       const double agreement = photometric.Agreement(x, y, s);
@@ -340,7 +340,7 @@ std::string StereoFillResult::BriefReport() const {
       "error %.2f%% (%.1f mm); rejected by ring %d, by shadow geometry %d, by %s %d",
       method.c_str(), termination.c_str(), filled_pixels, hole_pixels,
       hole_pixels ? 100.0 * filled_pixels / hole_pixels : 0.0, 100.0 * stereo_error_median,
-      1000.0 * stereo_error_median_m, rejected_by_ring, rejected_by_occlusion,
+      1000.0 * stereo_error_median_m, rejected_by_ring, rejected_by_shadow,
       third_view_used ? "third view" : "(no third view)", rejected_by_photometry);
   return buffer;
 }
@@ -390,6 +390,10 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   const double near = std::max(options.min_depth_m, 0.8 * measured[measured.size() / 50]);
   const double far =
       std::min(options.max_depth_m, 1.25 * measured[measured.size() - 1 - measured.size() / 50]);
+  if (!(near < far)) {
+    result.termination = "measured depth outside [min_depth_m, max_depth_m]";
+    return result;
+  }
   if (sgbm) {
     cv::Mat stereo = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
     // Stereo runs with the left camera of the pair first; when that is keyframe 2, its points are

@@ -12,10 +12,11 @@
 // camera, move it into keyframe 1 with the known pose and project it into keyframe 1's image
 // (z-buffer), then validate: the stereo depth must agree with the Kinect on measured pixels around
 // each hole, or that hole is left empty. In a projector shadow the depth must lie nearer the
-// shadow's far side than its near one (the shadow is the far surface). Where a third keyframe sees the filled point, its colour there must match keyframe
-// 1's (normalised cross-correlation of small patches), unless the third keyframe's sensor shows the
-// point hidden behind a nearer surface. Only pixels the sensor left empty are filled; measured
-// pixels are never changed. Each filled pixel carries a confidence and a source tag.
+// shadow's far side than its near one (the shadow is the far surface). Where a third keyframe sees
+// the filled point, its colour there must match keyframe 1's (normalised cross-correlation of small
+// patches), unless the third keyframe's sensor shows the point hidden behind a nearer surface. Only
+// pixels the sensor left empty are filled; measured pixels are never changed. Each filled pixel
+// carries a confidence and a source tag.
 //
 // No threads, no I/O. Usage:
 //   gf::StereoFillResult r = gf::FillHolesByStereo(key1, key2, camera, key1_from_key2, {});
@@ -96,7 +97,7 @@ struct StereoFillResult {
   int filled_pixels = 0;
   int rejected_by_ring = 0;        // hole pixels with stereo depth whose hole failed the ring test
   int rejected_by_photometry = 0;  // ... that the third view contradicted
-  int rejected_by_occlusion = 0;   // ... in projector shadows, nearer the shadow's near side
+  int rejected_by_shadow = 0;      // ... in projector shadows, nearer the shadow's near side
   bool third_view_used = false;
   double stereo_error_median = 0;    // relative, stereo vs Kinect where both exist
   double stereo_error_median_m = 0;  // the same in metres

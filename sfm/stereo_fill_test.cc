@@ -109,8 +109,8 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   // The default: SGBM, then the plane sweep (with a third keyframe, as in the pipeline) over the
   // holes SGBM left empty. Fills more than SGBM alone with the same third view.
   const ThirdView third{&c.frame, poses[10].Inverse() * poses[4]};
-  const StereoFillResult r3 = FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, sgbm_only,
-                                                third);
+  const StereoFillResult r3 =
+      FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, sgbm_only, third);
   const auto start = std::chrono::steady_clock::now();
   const StereoFillResult d =
       FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, StereoFillOptions{}, third);
