@@ -16,6 +16,7 @@
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "acquisition/stats.h"
 #include "acquisition/trajectory_metrics.h"
 #include "apps/progress.h"
 #include "registration/tracker.h"
@@ -37,14 +38,12 @@ struct MethodResult {
 };
 
 nlohmann::ordered_json Summarise(const MethodResult& m, const Trajectory* gt) {
-  std::vector<double> sorted = m.ms;
-  std::sort(sorted.begin(), sorted.end());
   double total = 0;
   for (double v : m.ms) total += v;
   nlohmann::ordered_json j;
   j["method"] = m.name;
   j["frames"] = m.trajectory.size();
-  j["median_ms"] = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
+  j["median_ms"] = Median(m.ms);
   j["fps"] = total > 0 ? 1000.0 * m.ms.size() / total : 0.0;
   j["failed_frames"] = m.failures;
   if (gt) {
@@ -60,12 +59,6 @@ Eigen::Matrix4d ToEigen(const cv::Mat& m) {
   Eigen::Matrix4d e;
   cv::cv2eigen(m, e);
   return e;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
 }
 
 // OpenCV's StereoSGBM alone on a rectified pair (the dense-stereo step without our range, checks
