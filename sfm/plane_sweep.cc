@@ -22,9 +22,140 @@ cv::Mat GrayFloat(const cv::Mat& bgr) {
 }
 
 struct ViewData {
-  cv::Mat gray_cover;        // CV_32FC2: undistorted grey level, 1 where the image has content
+  cv::Mat gray;    // CV_32F: undistorted grey level at working size, 0 outside the image
+  cv::Mat usable;  // CV_8U: 1 where the 2x2 neighbourhood of a bilinear sample with this top-left
+                   // corner lies inside the image
   Eigen::Matrix3d rotation;  // view_from_key1
   Eigen::Vector3d translation;
+};
+
+// out[x] = in[x] + in[x + step] + ... + in[x + (count - 1) step] for x < n; one pass, so the sums
+// vectorise over x. The common window sizes get a fixed count.
+template <int kCount>
+void SumFixed(const float* __restrict in, size_t step, int n, float* __restrict out) {
+  for (int x = 0; x < n; ++x) {
+    float a = in[x];
+    for (int k = 1; k < kCount; ++k) a += in[x + k * step];
+    out[x] = a;
+  }
+}
+void SumWindows(const float* in, size_t step, int count, int n, float* out) {
+  switch (count) {
+    case 3: return SumFixed<3>(in, step, n, out);
+    case 5: return SumFixed<5>(in, step, n, out);
+    case 7: return SumFixed<7>(in, step, n, out);
+    case 9: return SumFixed<9>(in, step, n, out);
+    default:
+      std::copy(in, in + n, out);
+      for (int k = 1; k < count; ++k)
+        for (int x = 0; x < n; ++x) out[x] += in[x + k * step];
+  }
+}
+
+// One row of one view's correlation with keyframe 1, from the window sums m (4 channels of n values,
+// as WindowSums gives them): where the view covers every pixel of the window that keyframe 1
+// covers, seen counts up; where both windows also have texture, sum gains the NCC and count one.
+// Branch-free, so that it vectorises. window_inside: keyframe 1's coverage mean per window;
+// mean_i, var_i: its grey level's.
+void AccumulateCorrelation(const float* m, int n, float inv_area, float min_inside, float min_var,
+                           const float* window_inside, const float* mean_i, const float* var_i,
+                           float* __restrict sum, float* __restrict count,
+                           float* __restrict seen) {
+  const float *m_jc = m, *m_jj = m + n, *m_ji = m + 2 * n, *m_c = m + 3 * n;
+  for (int x = 0; x < n; ++x) {
+    const float inside_x = window_inside[x];
+    const int inside = (inside_x >= min_inside) & (m_c[x] * inv_area >= inside_x - 1e-3f);
+    const float inv_n = inv_area / inside_x;
+    const float mj = m_jc[x] * inv_n;
+    const float vj = m_jj[x] * inv_n - mj * mj;
+    const int textured = inside & (vj > min_var) & (var_i[x] > min_var);
+    const float ncc = (m_ji[x] * inv_n - mean_i[x] * mj) / std::sqrt(std::max(var_i[x] * vj, 1e-12f));
+    seen[x] += static_cast<float>(inside);
+    sum[x] += ncc * static_cast<float>(textured);
+    count[x] += static_cast<float>(textured);
+  }
+}
+
+// Window sums of one view's warped grey level J for a plane, one output row at a time: J is
+// sampled bilinearly through the plane's homography (key1 pixel -> view pixel), then summed over
+// window x window pixels (zero outside the ROI, as a constant-border box filter). The four sums:
+// J c, J^2 c, J I c and the view's coverage c (c: keyframe 1's coverage, I: its grey level).
+// Direct sums (no running sums) keep float rounding from drifting along rows and columns.
+class WindowSums {
+ public:
+  WindowSums(int rows, int cols, int window)
+      : rows_(rows), cols_(cols), window_(window), half_(window / 2),
+        padded_(cols + 2 * (window / 2)), sample_(4 * padded_, 0.f),
+        ring_(static_cast<size_t>(window) * 4 * cols, 0.f), sums_(4 * cols), u_(cols), v_(cols) {}
+
+  // Runs over the ROI for one view and plane; calls row_done(y, sums) for every output row y,
+  // sums holding the 4 channels of `cols` values each (channel-major).
+  template <typename RowDone>
+  void Run(const ViewData& view, const Eigen::Matrix3d& key1_to_view, const cv::Mat& i_roi,
+           const cv::Mat& c_roi, RowDone row_done) {
+    std::fill(ring_.begin(), ring_.end(), 0.f);
+    float h[9];
+    for (int i = 0; i < 9; ++i) h[i] = static_cast<float>(key1_to_view(i / 3, i % 3));
+    const int width = view.gray.cols, height = view.gray.rows;
+    const float max_u = static_cast<float>(width - 1), max_v = static_cast<float>(height - 1);
+    for (int y = 0; y < rows_ + half_; ++y) {
+      float* slot = &ring_[static_cast<size_t>(y % window_) * 4 * cols_];
+      if (y < rows_) {
+        // Sample positions: the homography is affine along a row up to the division.
+        const float bx = h[1] * y + h[2], by = h[4] * y + h[5], bz = h[7] * y + h[8];
+        for (int x = 0; x < cols_; ++x) {
+          const float qz = bz + h[6] * x;
+          const float inv = qz > 1e-9f ? 1.f / qz : 0.f;
+          u_[x] = qz > 1e-9f ? (bx + h[0] * x) * inv : -1.f;
+          v_[x] = (by + h[3] * x) * inv;
+        }
+        const float* iv = i_roi.ptr<float>(y);
+        const float* cv1 = c_roi.ptr<float>(y);
+        float* jc = &sample_[half_];
+        float* jj = jc + padded_;
+        float* ji = jj + padded_;
+        float* cc = ji + padded_;
+        for (int x = 0; x < cols_; ++x) {
+          const float u = u_[x], v = v_[x];
+          float j = 0.f, covered = 0.f;
+          if (u >= 0.f && v >= 0.f && u < max_u && v < max_v) {
+            const int x0 = static_cast<int>(u), y0 = static_cast<int>(v);
+            const size_t at = static_cast<size_t>(y0) * width + x0;
+            if (view.usable.data[at]) {
+              const float* g = reinterpret_cast<const float*>(view.gray.data) + at;
+              const float fu = u - x0, fv = v - y0;
+              const float top = g[0] + fu * (g[1] - g[0]);
+              const float bottom = g[width] + fu * (g[width + 1] - g[width]);
+              j = top + fv * (bottom - top);
+              covered = 1.f;
+            }
+          }
+          const float weighted = j * cv1[x];
+          jc[x] = weighted;
+          jj[x] = weighted * j;
+          ji[x] = weighted * iv[x];
+          cc[x] = covered * cv1[x];
+        }
+        for (int c = 0; c < 4; ++c)
+          SumWindows(&sample_[static_cast<size_t>(c) * padded_], 1, window_, cols_,
+                     slot + static_cast<size_t>(c) * cols_);
+      } else {
+        std::fill(slot, slot + 4 * cols_, 0.f);
+      }
+      const int out_row = y - half_;
+      if (out_row < 0) continue;
+      // The ring holds rows out_row - half .. out_row + half, in some order; their sum is the
+      // same in any order.
+      SumWindows(ring_.data(), 4 * cols_, window_, 4 * cols_, sums_.data());
+      row_done(out_row, sums_.data());
+    }
+  }
+
+ private:
+  int rows_, cols_, window_, half_, padded_;
+  std::vector<float> sample_;  // 4 channels of one ROI row, padded by half a window each side
+  std::vector<float> ring_;    // the last `window` rows' horizontal sums, 4 channels each
+  std::vector<float> sums_, u_, v_;
 };
 
 // Cost volume entries: 100 * (1 - mean NCC) in [0, 200]; textureless_cost where keyframe 1's
@@ -74,6 +205,41 @@ void AggregatePath(const std::vector<uint8_t>& cost, int rows, int cols, int pla
     std::swap(previous_min, current_min);
   }
 }
+
+// Where each (distorted) pixel of the camera lies in the undistorted pinhole image: exact
+// (Camera::UndistortPixel) on a grid of every kStep-th pixel, bilinear in between. The distortion
+// field is smooth, so the interpolation is far below a pixel off, at a 64th of the cost.
+class UndistortedPixels {
+ public:
+  explicit UndistortedPixels(const Camera& camera)
+      : camera_(camera), distorted_(camera.HasDistortion()) {
+    if (!distorted_) return;
+    nodes_x_ = (camera.width - 1 + kStep - 1) / kStep + 1;
+    nodes_y_ = (camera.height - 1 + kStep - 1) / kStep + 1;
+    nodes_.resize(static_cast<size_t>(nodes_x_) * nodes_y_);
+    for (int j = 0; j < nodes_y_; ++j)
+      for (int i = 0; i < nodes_x_; ++i) nodes_[j * nodes_x_ + i] = Exact(i * kStep, j * kStep);
+  }
+  Eigen::Vector2d At(int x, int y) const {
+    if (!distorted_) return Eigen::Vector2d(x, y);
+    const int i = std::min(x / kStep, nodes_x_ - 2), j = std::min(y / kStep, nodes_y_ - 2);
+    const double a = (x - i * kStep) / static_cast<double>(kStep),
+                 b = (y - j * kStep) / static_cast<double>(kStep);
+    const Eigen::Vector2d* n = &nodes_[j * nodes_x_ + i];
+    return (1 - b) * ((1 - a) * n[0] + a * n[1]) + b * ((1 - a) * n[nodes_x_] + a * n[nodes_x_ + 1]);
+  }
+
+ private:
+  static constexpr int kStep = 8;
+  Eigen::Vector2d Exact(int x, int y) const {
+    const Eigen::Vector2d n = camera_.UndistortPixel({x, y});
+    return {camera_.fx * n.x() + camera_.cx, camera_.fy * n.y() + camera_.cy};
+  }
+  const Camera& camera_;
+  bool distorted_;
+  int nodes_x_ = 0, nodes_y_ = 0;
+  std::vector<Eigen::Vector2d> nodes_;
+};
 
 }  // namespace
 
@@ -155,9 +321,13 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
   for (const SweepView& v : views) {
     GF_CHECK(v.frame != nullptr && v.frame->color.type() == CV_8UC3, "views need BGR colour");
     const SE3 view_from_key1 = v.key1_from_view.Inverse();
-    cv::Mat gray_cover;
-    cv::merge(std::vector<cv::Mat>{shrink_gray(v.frame->color), cover1}, gray_cover);
-    data.push_back({gray_cover, view_from_key1.RotationMatrix(), view_from_key1.translation()});
+    // usable(x, y): cover1 at (x, y), (x + 1, y), (x, y + 1) and (x + 1, y + 1).
+    cv::Mat usable;
+    cv::erode(cover1, usable, cv::Mat::ones(2, 2, CV_8U), cv::Point(0, 0), 1, cv::BORDER_CONSTANT,
+              cv::Scalar(0));
+    usable.convertTo(usable, CV_8U);
+    data.push_back({shrink_gray(v.frame->color), usable, view_from_key1.RotationMatrix(),
+                    view_from_key1.translation()});
     max_baseline = std::max(max_baseline, view_from_key1.TranslationNorm());
   }
   const Eigen::Matrix3d k = work_camera.K(), k_inv = k.inverse();
@@ -197,71 +367,43 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
   Eigen::Matrix3d shift = Eigen::Matrix3d::Identity();  // ROI pixel -> full image pixel
   shift(0, 2) = roi.x;
   shift(1, 2) = roi.y;
-  cv::Mat sum(rows, cols, CV_32F), count(rows, cols, CV_32F), seen(rows, cols, CV_8U);
-  cv::Mat warped, stack(rows, cols, CV_32FC4), means;
+  cv::Mat sum(rows, cols, CV_32F), count(rows, cols, CV_32F), seen(rows, cols, CV_32F);
+  WindowSums window_sums(rows, cols, options.window_px);
+  const float inv_area = 1.f / (options.window_px * options.window_px);
+  const float min_var_f = static_cast<float>(min_var);
+  const float min_inside = static_cast<float>(options.min_window_inside);
+  const float neutral = static_cast<float>(options.textureless_cost);
+  std::vector<uint8_t> row_cost(cols);
   for (int plane = 0; plane < planes; ++plane) {
     const double w = w_far + plane * dw;
     sum.setTo(0.f);
     count.setTo(0.f);
-    seen.setTo(0);
+    seen.setTo(0.f);
     for (const ViewData& v : data) {
       Eigen::Matrix3d h = v.rotation;
       h.col(2) += v.translation * w;  // R + t n^T / z with n = (0, 0, 1)
-      const Eigen::Matrix3d key1_to_view = k * h * k_inv * shift;
-      cv::Mat homography;
-      cv::eigen2cv(key1_to_view, homography);
-      cv::warpPerspective(v.gray_cover, warped, homography, roi.size(),
-                          cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT,
-                          cv::Scalar(0, 0));
-      // Window sums of J, J^2, I J and the view's coverage, over keyframe 1's covered pixels.
-      for (int y = 0; y < rows; ++y) {
-        const cv::Vec2f* jw = warped.ptr<cv::Vec2f>(y);
-        const float* iv = i_roi.ptr<float>(y);
-        const float* cv1 = c_roi.ptr<float>(y);
-        cv::Vec4f* out = stack.ptr<cv::Vec4f>(y);
-        for (int x = 0; x < cols; ++x) {
-          const float j = jw[x][0] * cv1[x];
-          out[x] = cv::Vec4f(j, j * jw[x][0], j * iv[x], jw[x][1] * cv1[x]);
-        }
-      }
-      cv::boxFilter(stack, means, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_CONSTANT);
-      for (int y = 0; y < rows; ++y) {
-        const cv::Vec4f* m = means.ptr<cv::Vec4f>(y);
-        const float* n = n1.ptr<float>(y);
-        const float* mi = mean_i.ptr<float>(y);
-        const float* vi = var_i.ptr<float>(y);
-        float* s = sum.ptr<float>(y);
-        float* c = count.ptr<float>(y);
-        uint8_t* sn = seen.ptr<uint8_t>(y);
-        for (int x = 0; x < cols; ++x) {
-          // The view must cover every pixel of the window that keyframe 1 covers.
-          if (n[x] < options.min_window_inside || m[x][3] < n[x] - 1e-3f) continue;
-          sn[x] = 1;
-          const float inv_n = 1.f / n[x];
-          const float mj = m[x][0] * inv_n;
-          const float vj = m[x][1] * inv_n - mj * mj;
-          if (!(vj > min_var) || !(vi[x] > min_var)) continue;
-          s[x] += (m[x][2] * inv_n - mi[x] * mj) / std::sqrt(vi[x] * vj);
-          c[x] += 1.f;
-        }
-      }
+      // Correlation over keyframe 1's covered pixels of each window.
+      window_sums.Run(v, k * h * k_inv * shift, i_roi, c_roi, [&](int y, const float* m) {
+        AccumulateCorrelation(m, cols, inv_area, min_inside, min_var_f, n1.ptr<float>(y),
+                              mean_i.ptr<float>(y), var_i.ptr<float>(y), sum.ptr<float>(y),
+                              count.ptr<float>(y), seen.ptr<float>(y));
+      });
     }
     for (int y = 0; y < rows; ++y) {
       const float* s = sum.ptr<float>(y);
       const float* c = count.ptr<float>(y);
       const float* vi = var_i.ptr<float>(y);
-      const uint8_t* sn = seen.ptr<uint8_t>(y);
-      uint8_t* out = &cost[static_cast<size_t>(y) * cols * planes + plane];
-      for (int x = 0; x < cols; ++x, out += planes) {
-        if (!sn[x] || !(vi[x] > min_var)) {
-          *out = static_cast<uint8_t>(options.textureless_cost);
-        } else if (c[x] == 0) {
-          *out = 100;  // textured here, flat in every view: no match
-        } else {
-          *out =
-              static_cast<uint8_t>(std::clamp(std::lround(100.0 * (1.0 - s[x] / c[x])), 0L, 200L));
-        }
+      const float* sn = seen.ptr<float>(y);
+      // textureless_cost where no view sees the window or keyframe 1's window is flat; 100 where
+      // it is textured and flat in every view (no match); else 100 (1 - mean NCC), rounded.
+      for (int x = 0; x < cols; ++x) {
+        const float textured_here = (sn[x] > 0.f) & (vi[x] > min_var_f);
+        const float matched = c[x] > 0.f ? 100.f * (1.f - s[x] / std::max(c[x], 1.f)) : 100.f;
+        const float value = textured_here ? matched : neutral;
+        row_cost[x] = static_cast<uint8_t>(std::clamp(value, 0.f, 200.f) + 0.5f);
       }
+      uint8_t* out = &cost[static_cast<size_t>(y) * cols * planes + plane];
+      for (int x = 0; x < cols; ++x) out[static_cast<size_t>(x) * planes] = row_cost[x];
     }
   }
 
@@ -322,14 +464,11 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
       score_u.at<float>(y + roi.y, x + roi.x) = 1.f - c / 100.f;
     }
   }
+  const UndistortedPixels undistorted(camera);
   for (int y = 0; y < size.height; ++y) {
     for (int x = 0; x < size.width; ++x) {
       if (!mask.at<uint8_t>(y, x)) continue;
-      Eigen::Vector2d u(x, y);  // undistorted pixel, full size
-      if (distorted) {
-        const Eigen::Vector2d n = camera.UndistortPixel({x, y});
-        u = Eigen::Vector2d(camera.fx * n.x() + camera.cx, camera.fy * n.y() + camera.cy);
-      }
+      const Eigen::Vector2d u = undistorted.At(x, y);  // full size
       const int ux = static_cast<int>(std::lround((u.x() + 0.5) * scale - 0.5)),
                 uy = static_cast<int>(std::lround((u.y() + 0.5) * scale - 0.5));
       if (ux < 0 || uy < 0 || ux >= work.width || uy >= work.height) continue;
