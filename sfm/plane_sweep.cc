@@ -14,6 +14,14 @@
 namespace gf {
 namespace {
 
+// The inner loops are compiled twice, for AVX2 (twice the vector width) and for the baseline
+// x86-64 (SSE2); the loader picks what the CPU has.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define GF_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define GF_VECTOR_CLONES
+#endif
+
 cv::Mat GrayFloat(const cv::Mat& bgr) {
   cv::Mat gray, f;
   cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
@@ -22,9 +30,9 @@ cv::Mat GrayFloat(const cv::Mat& bgr) {
 }
 
 struct ViewData {
-  cv::Mat gray;    // CV_32F: undistorted grey level at working size, 0 outside the image
-  cv::Mat usable;  // CV_8U: 1 where the 2x2 neighbourhood of a bilinear sample with this top-left
-                   // corner lies inside the image
+  cv::Mat gray;              // CV_32F: undistorted grey level at working size, 0 outside the image
+  cv::Mat usable;            // CV_32F: 1 where the 2x2 neighbourhood of a bilinear sample with this
+                             // top-left corner lies inside the image, else 0
   Eigen::Matrix3d rotation;  // view_from_key1
   Eigen::Vector3d translation;
 };
@@ -39,12 +47,16 @@ void SumFixed(const float* __restrict in, size_t step, int n, float* __restrict 
     out[x] = a;
   }
 }
-void SumWindows(const float* in, size_t step, int count, int n, float* out) {
+GF_VECTOR_CLONES void SumWindows(const float* in, size_t step, int count, int n, float* out) {
   switch (count) {
-    case 3: return SumFixed<3>(in, step, n, out);
-    case 5: return SumFixed<5>(in, step, n, out);
-    case 7: return SumFixed<7>(in, step, n, out);
-    case 9: return SumFixed<9>(in, step, n, out);
+    case 3:
+      return SumFixed<3>(in, step, n, out);
+    case 5:
+      return SumFixed<5>(in, step, n, out);
+    case 7:
+      return SumFixed<7>(in, step, n, out);
+    case 9:
+      return SumFixed<9>(in, step, n, out);
     default:
       std::copy(in, in + n, out);
       for (int k = 1; k < count; ++k)
@@ -52,15 +64,16 @@ void SumWindows(const float* in, size_t step, int count, int n, float* out) {
   }
 }
 
-// One row of one view's correlation with keyframe 1, from the window sums m (4 channels of n values,
-// as WindowSums gives them): where the view covers every pixel of the window that keyframe 1
-// covers, seen counts up; where both windows also have texture, sum gains the NCC and count one.
+// One row of one view's correlation with keyframe 1, from the window sums m (4 channels of n
+// values, as WindowSums gives them): where the view covers every pixel of the window that keyframe
+// 1 covers, seen counts up; where both windows also have texture, sum gains the NCC and count one.
 // Branch-free, so that it vectorises. window_inside: keyframe 1's coverage mean per window;
 // mean_i, var_i: its grey level's.
-void AccumulateCorrelation(const float* m, int n, float inv_area, float min_inside, float min_var,
-                           const float* window_inside, const float* mean_i, const float* var_i,
-                           float* __restrict sum, float* __restrict count,
-                           float* __restrict seen) {
+GF_VECTOR_CLONES void AccumulateCorrelation(const float* m, int n, float inv_area, float min_inside,
+                                            float min_var, const float* window_inside,
+                                            const float* mean_i, const float* var_i,
+                                            float* __restrict sum, float* __restrict count,
+                                            float* __restrict seen) {
   const float *m_jc = m, *m_jj = m + n, *m_ji = m + 2 * n, *m_c = m + 3 * n;
   for (int x = 0; x < n; ++x) {
     const float inside_x = window_inside[x];
@@ -69,10 +82,63 @@ void AccumulateCorrelation(const float* m, int n, float inv_area, float min_insi
     const float mj = m_jc[x] * inv_n;
     const float vj = m_jj[x] * inv_n - mj * mj;
     const int textured = inside & (vj > min_var) & (var_i[x] > min_var);
-    const float ncc = (m_ji[x] * inv_n - mean_i[x] * mj) / std::sqrt(std::max(var_i[x] * vj, 1e-12f));
+    const float ncc =
+        (m_ji[x] * inv_n - mean_i[x] * mj) / std::sqrt(std::max(var_i[x] * vj, 1e-12f));
     seen[x] += static_cast<float>(inside);
     sum[x] += ncc * static_cast<float>(textured);
     count[x] += static_cast<float>(textured);
+  }
+}
+
+// Where the pixels (x, y), x < n, of a row map through the homography h (row-major): the
+// homography is affine along a row up to the division. Behind the camera, or with a homography that
+// is not finite: -1, outside every image.
+GF_VECTOR_CLONES void SamplePositions(const float* h, bool finite, int y, int n,
+                                      float* __restrict u, float* __restrict v) {
+  const float bx = h[1] * y + h[2], by = h[4] * y + h[5], bz = h[7] * y + h[8];
+  for (int x = 0; x < n; ++x) {
+    const float qz = bz + h[6] * x;
+    const bool ahead = qz > 1e-9f && finite;
+    const float inv = ahead ? 1.f / qz : 0.f;
+    u[x] = ahead ? (bx + h[0] * x) * inv : -1.f;
+    v[x] = ahead ? (by + h[3] * x) * inv : -1.f;
+  }
+}
+
+// One row of samples of a view at positions (u, v) (NaN or outside: none): J, bilinear where the
+// 2x2 neighbourhood lies in the view's image, else 0 and uncovered; then the products the window
+// sums need, weighted by keyframe 1's coverage c1 (i1: its grey level). Branch-free, so that it
+// vectorises (gathers).
+GF_VECTOR_CLONES void SampleRow(const ViewData& view, const float* __restrict u_in,
+                                const float* __restrict v_in, int n, const float* __restrict i1,
+                                const float* __restrict c1, float* __restrict jc,
+                                float* __restrict jj, float* __restrict ji,
+                                float* __restrict covered) {
+  const int width = view.gray.cols;
+  // Largest positions whose 2x2 neighbourhood is inside: just below the last row and column.
+  const float max_u = std::nextafter(static_cast<float>(width - 1), 0.f),
+              max_v = std::nextafter(static_cast<float>(view.gray.rows - 1), 0.f);
+  const float* gray = reinterpret_cast<const float*>(view.gray.data);
+  const float* usable = reinterpret_cast<const float*>(view.usable.data);
+  for (int x = 0; x < n; ++x) {
+    // Clamped into the image; inside when clamping changed nothing (two selects: a combined
+    // condition would not vectorise).
+    const float u = std::min(std::max(u_in[x], 0.f), max_u),
+                v = std::min(std::max(v_in[x], 0.f), max_v);
+    const float inside_u = u == u_in[x] ? 1.f : 0.f;
+    const float inside = v == v_in[x] ? inside_u : 0.f;
+    const int x0 = static_cast<int>(u), y0 = static_cast<int>(v);
+    const int at = y0 * width + x0;
+    const float fu = u - x0, fv = v - y0;
+    const float top = gray[at] + fu * (gray[at + 1] - gray[at]);
+    const float bottom = gray[at + width] + fu * (gray[at + width + 1] - gray[at + width]);
+    const float seen = inside * usable[at];
+    const float j = (top + fv * (bottom - top)) * seen;
+    const float weighted = j * c1[x];
+    jc[x] = weighted;
+    jj[x] = weighted * j;
+    ji[x] = weighted * i1[x];
+    covered[x] = seen * c1[x];
   }
 }
 
@@ -84,9 +150,16 @@ void AccumulateCorrelation(const float* m, int n, float inv_area, float min_insi
 class WindowSums {
  public:
   WindowSums(int rows, int cols, int window)
-      : rows_(rows), cols_(cols), window_(window), half_(window / 2),
-        padded_(cols + 2 * (window / 2)), sample_(4 * padded_, 0.f),
-        ring_(static_cast<size_t>(window) * 4 * cols, 0.f), sums_(4 * cols), u_(cols), v_(cols) {}
+      : rows_(rows),
+        cols_(cols),
+        window_(window),
+        half_(window / 2),
+        padded_(cols + 2 * (window / 2)),
+        sample_(4 * padded_, 0.f),
+        ring_(static_cast<size_t>(window) * 4 * cols, 0.f),
+        sums_(4 * cols),
+        u_(cols),
+        v_(cols) {}
 
   // Runs over the ROI for one view and plane; calls row_done(y, sums) for every output row y,
   // sums holding the 4 channels of `cols` values each (channel-major).
@@ -96,46 +169,14 @@ class WindowSums {
     std::fill(ring_.begin(), ring_.end(), 0.f);
     float h[9];
     for (int i = 0; i < 9; ++i) h[i] = static_cast<float>(key1_to_view(i / 3, i % 3));
-    const int width = view.gray.cols, height = view.gray.rows;
-    const float max_u = static_cast<float>(width - 1), max_v = static_cast<float>(height - 1);
+    const bool finite = key1_to_view.allFinite();
     for (int y = 0; y < rows_ + half_; ++y) {
       float* slot = &ring_[static_cast<size_t>(y % window_) * 4 * cols_];
       if (y < rows_) {
-        // Sample positions: the homography is affine along a row up to the division.
-        const float bx = h[1] * y + h[2], by = h[4] * y + h[5], bz = h[7] * y + h[8];
-        for (int x = 0; x < cols_; ++x) {
-          const float qz = bz + h[6] * x;
-          const float inv = qz > 1e-9f ? 1.f / qz : 0.f;
-          u_[x] = qz > 1e-9f ? (bx + h[0] * x) * inv : -1.f;
-          v_[x] = (by + h[3] * x) * inv;
-        }
-        const float* iv = i_roi.ptr<float>(y);
-        const float* cv1 = c_roi.ptr<float>(y);
+        SamplePositions(h, finite, y, cols_, u_.data(), v_.data());
         float* jc = &sample_[half_];
-        float* jj = jc + padded_;
-        float* ji = jj + padded_;
-        float* cc = ji + padded_;
-        for (int x = 0; x < cols_; ++x) {
-          const float u = u_[x], v = v_[x];
-          float j = 0.f, covered = 0.f;
-          if (u >= 0.f && v >= 0.f && u < max_u && v < max_v) {
-            const int x0 = static_cast<int>(u), y0 = static_cast<int>(v);
-            const size_t at = static_cast<size_t>(y0) * width + x0;
-            if (view.usable.data[at]) {
-              const float* g = reinterpret_cast<const float*>(view.gray.data) + at;
-              const float fu = u - x0, fv = v - y0;
-              const float top = g[0] + fu * (g[1] - g[0]);
-              const float bottom = g[width] + fu * (g[width + 1] - g[width]);
-              j = top + fv * (bottom - top);
-              covered = 1.f;
-            }
-          }
-          const float weighted = j * cv1[x];
-          jc[x] = weighted;
-          jj[x] = weighted * j;
-          ji[x] = weighted * iv[x];
-          cc[x] = covered * cv1[x];
-        }
+        SampleRow(view, u_.data(), v_.data(), cols_, i_roi.ptr<float>(y), c_roi.ptr<float>(y), jc,
+                  jc + padded_, jc + 2 * padded_, jc + 3 * padded_);
         for (int c = 0; c < 4; ++c)
           SumWindows(&sample_[static_cast<size_t>(c) * padded_], 1, window_, cols_,
                      slot + static_cast<size_t>(c) * cols_);
@@ -144,8 +185,7 @@ class WindowSums {
       }
       const int out_row = y - half_;
       if (out_row < 0) continue;
-      // The ring holds rows out_row - half .. out_row + half, in some order; their sum is the
-      // same in any order.
+      // The ring holds rows out_row - half .. out_row + half (in rotated order).
       SumWindows(ring_.data(), 4 * cols_, window_, 4 * cols_, sums_.data());
       row_done(out_row, sums_.data());
     }
@@ -165,8 +205,9 @@ class WindowSums {
 // into sum: L(p, d) = C(p, d) + min(L(q, d), L(q, d +- 1) + p1, min_k L(q, k) + p2) - min_k L(q, k)
 // with q the predecessor of p along (dx, dy). Rows are visited in the path's vertical direction,
 // so a predecessor is either earlier in the same row (dy = 0) or in the previous row.
-void AggregatePath(const std::vector<uint8_t>& cost, int rows, int cols, int planes, int dx, int dy,
-                   int p1, int p2, std::vector<uint16_t>* sum) {
+GF_VECTOR_CLONES void AggregatePath(const std::vector<uint8_t>& cost, int rows, int cols,
+                                    int planes, int dx, int dy, int p1, int p2,
+                                    std::vector<uint16_t>* sum) {
   // Each pixel's L row is padded with one large entry on either side, so that the d - 1 and
   // d + 1 neighbours need no bounds checks (and the loop vectorises).
   const size_t stride = static_cast<size_t>(planes) + 2;
@@ -226,7 +267,8 @@ class UndistortedPixels {
     const double a = (x - i * kStep) / static_cast<double>(kStep),
                  b = (y - j * kStep) / static_cast<double>(kStep);
     const Eigen::Vector2d* n = &nodes_[j * nodes_x_ + i];
-    return (1 - b) * ((1 - a) * n[0] + a * n[1]) + b * ((1 - a) * n[nodes_x_] + a * n[nodes_x_ + 1]);
+    return (1 - b) * ((1 - a) * n[0] + a * n[1]) +
+           b * ((1 - a) * n[nodes_x_] + a * n[nodes_x_ + 1]);
   }
 
  private:
@@ -325,7 +367,6 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
     cv::Mat usable;
     cv::erode(cover1, usable, cv::Mat::ones(2, 2, CV_8U), cv::Point(0, 0), 1, cv::BORDER_CONSTANT,
               cv::Scalar(0));
-    usable.convertTo(usable, CV_8U);
     data.push_back({shrink_gray(v.frame->color), usable, view_from_key1.RotationMatrix(),
                     view_from_key1.translation()});
     max_baseline = std::max(max_baseline, view_from_key1.TranslationNorm());
