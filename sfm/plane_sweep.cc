@@ -5,8 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "acquisition/errors.h"
@@ -29,10 +27,12 @@ cv::Mat GrayFloat(const cv::Mat& bgr) {
   return f;
 }
 
+// Grey level of view pixels outside the image: a bilinear sample with any share of one is below
+// -0.5 (shares are at least ~1e-9 in float), so it is known as uncovered.
+constexpr float kUncovered = -1e9f;
+
 struct ViewData {
-  cv::Mat gray;              // CV_32F: undistorted grey level at working size, 0 outside the image
-  cv::Mat usable;            // CV_32F: 1 where the 2x2 neighbourhood of a bilinear sample with this
-                             // top-left corner lies inside the image, else 0
+  cv::Mat gray;  // CV_32F: undistorted grey level at working size, kUncovered outside the image
   Eigen::Matrix3d rotation;  // view_from_key1
   Eigen::Vector3d translation;
 };
@@ -105,10 +105,10 @@ GF_VECTOR_CLONES void SamplePositions(const float* h, bool finite, int y, int n,
   }
 }
 
-// One row of samples of a view at positions (u, v) (NaN or outside: none): J, bilinear where the
-// 2x2 neighbourhood lies in the view's image, else 0 and uncovered; then the products the window
-// sums need, weighted by keyframe 1's coverage c1 (i1: its grey level). Branch-free, so that it
-// vectorises (gathers).
+// One row of samples of a view at positions (u, v) (outside the image: none; never NaN, as
+// SamplePositions gives them): J, bilinear where every pixel with a share in it lies in the view's
+// image, else 0 and uncovered; then the products the window sums need, weighted by keyframe 1's
+// coverage c1 (i1: its grey level). Branch-free, so that it vectorises (gathers).
 GF_VECTOR_CLONES void SampleRow(const ViewData& view, const float* __restrict u_in,
                                 const float* __restrict v_in, int n, const float* __restrict i1,
                                 const float* __restrict c1, float* __restrict jc,
@@ -119,7 +119,6 @@ GF_VECTOR_CLONES void SampleRow(const ViewData& view, const float* __restrict u_
   const float max_u = std::nextafter(static_cast<float>(width - 1), 0.f),
               max_v = std::nextafter(static_cast<float>(view.gray.rows - 1), 0.f);
   const float* gray = reinterpret_cast<const float*>(view.gray.data);
-  const float* usable = reinterpret_cast<const float*>(view.usable.data);
   for (int x = 0; x < n; ++x) {
     // Clamped into the image; inside when clamping changed nothing (two selects: a combined
     // condition would not vectorise).
@@ -132,8 +131,10 @@ GF_VECTOR_CLONES void SampleRow(const ViewData& view, const float* __restrict u_
     const float fu = u - x0, fv = v - y0;
     const float top = gray[at] + fu * (gray[at + 1] - gray[at]);
     const float bottom = gray[at + width] + fu * (gray[at + width + 1] - gray[at + width]);
-    const float seen = inside * usable[at];
-    const float j = (top + fv * (bottom - top)) * seen;
+    const float sample = top + fv * (bottom - top);
+    // Any uncovered pixel with a share in the sample drags it far below zero.
+    const float seen = sample > -0.5f ? inside : 0.f;
+    const float j = sample * seen;
     const float weighted = j * c1[x];
     jc[x] = weighted;
     jj[x] = weighted * j;
@@ -363,12 +364,9 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
   for (const SweepView& v : views) {
     GF_CHECK(v.frame != nullptr && v.frame->color.type() == CV_8UC3, "views need BGR colour");
     const SE3 view_from_key1 = v.key1_from_view.Inverse();
-    // usable(x, y): cover1 at (x, y), (x + 1, y), (x, y + 1) and (x + 1, y + 1).
-    cv::Mat usable;
-    cv::erode(cover1, usable, cv::Mat::ones(2, 2, CV_8U), cv::Point(0, 0), 1, cv::BORDER_CONSTANT,
-              cv::Scalar(0));
-    data.push_back({shrink_gray(v.frame->color), usable, view_from_key1.RotationMatrix(),
-                    view_from_key1.translation()});
+    cv::Mat gray = shrink_gray(v.frame->color);
+    gray.setTo(kUncovered, cover1 == 0.f);
+    data.push_back({gray, view_from_key1.RotationMatrix(), view_from_key1.translation()});
     max_baseline = std::max(max_baseline, view_from_key1.TranslationNorm());
   }
   const Eigen::Matrix3d k = work_camera.K(), k_inv = k.inverse();

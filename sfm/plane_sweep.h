@@ -5,14 +5,14 @@
 // Fronto-parallel planes of keyframe 1, evenly spaced in inverse depth, are swept through the
 // requested depth range; for each plane the other views are warped into keyframe 1 by the plane's
 // homography (on undistorted images shrunk by `downscale`) and compared with keyframe 1 by
-// zero-mean normalised cross-correlation over a window (box filters; windows weighted by keyframe
-// 1's coverage, so they may cross its border). The cost 1 - mean NCC over the views that see a
-// pixel is aggregated along 8 image paths (semi-global matching); each pixel takes the plane of
-// least aggregated cost, refined to sub-plane precision by a parabola. A pixel gets a depth only
-// when its window has texture, the correlation at that plane is high enough, the minimum is
-// distinct (below every plane more than one step away by a margin) and the views that see it give
-// enough parallax (a 3% change of depth moves the pixel by at least min_parallax_px in some view:
-// near the epipole forward motion gives none).
+// zero-mean normalised cross-correlation over a window (window sums per row, fused with the warp in
+// loops that vectorise; windows weighted by keyframe 1's coverage, so they may cross its border).
+// The cost 1 - mean NCC over the views that see a pixel is aggregated along 8 image paths
+// (semi-global matching); each pixel takes the plane of least aggregated cost, refined to sub-plane
+// precision by a parabola. A pixel gets a depth only when its window has texture, the correlation
+// at that plane is high enough, the minimum is distinct (below every plane more than one step away
+// by a margin) and the views that see it give enough parallax (a 3% change of depth moves the pixel
+// by at least min_parallax_px in some view: near the epipole forward motion gives none).
 //
 // No threads, no I/O. Usage:
 //   gf::PlaneSweepResult r = gf::SweepDepth(key1, {{&key2, key1_from_key2}}, camera, mask,
