@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -62,7 +63,8 @@ Eigen::Matrix4d ToEigen(const cv::Mat& m) {
 }
 
 // OpenCV's StereoSGBM alone on a rectified pair (the dense-stereo step without our range, checks
-// and validation): 128 disparities, the block size of StereoFillOptions. Returns milliseconds.
+// and validation): 128 disparities, the other SGBM settings of StereoFillOptions' defaults.
+// Returns milliseconds.
 double TimeOpenCvSgbm(const RgbdFrame& a, const RgbdFrame& b, const Camera& camera,
                       const SE3& b_from_a) {
   const auto t0 = Clock::now();
@@ -81,9 +83,11 @@ double TimeOpenCvSgbm(const RgbdFrame& a, const RgbdFrame& b, const Camera& came
   cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r2, p2, size, CV_16SC2, map_x,
                               map_y);
   cv::remap(gray_b, rect_b, map_x, map_y, cv::INTER_LINEAR);
-  const int bs = StereoFillOptions{}.block_size;
-  cv::StereoSGBM::create(0, 128, bs, 8 * bs * bs, 32 * bs * bs, 1, 63, 10, 100, 2,
-                         cv::StereoSGBM::MODE_SGBM_3WAY)
+  const StereoFillOptions o;
+  const int bs = o.block_size;
+  cv::StereoSGBM::create(
+      0, 128, bs, 8 * bs * bs, 32 * bs * bs, static_cast<int>(std::lround(o.max_lr_difference_px)),
+      63, o.uniqueness_ratio, o.speckle_window, o.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY)
       ->compute(rect_a, rect_b, disparity);
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -114,9 +118,7 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
     holes += r.hole_pixels;
     filled += r.filled_pixels;
     ++methods[r.method.empty() ? r.termination : r.method];
-    const double margin = StereoFillOptions{}.epipole_margin_px;
-    if (!EpipoleInsideImage(camera, key1_from_key2, margin) &&
-        !EpipoleInsideImage(camera, key1_from_key2.Inverse(), margin))
+    if (!IsForwardPair(camera, key1_from_key2, StereoFillOptions{}.epipole_margin_px))
       sgbm_ms.push_back(
           TimeOpenCvSgbm(job.key1->frame, job.key2->frame, camera, key1_from_key2.Inverse()));
   };

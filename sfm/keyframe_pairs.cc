@@ -237,8 +237,7 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
     // Parallax comes from the motion across key1's optical axis, or from all of it when forward
     // pairs go to the plane sweep.
     const double lateral = options.allow_forward ? g.baseline : rel.translation().head<2>().norm();
-    const bool is_forward = EpipoleInsideImage(camera, rel, options.epipole_margin_px) ||
-                            EpipoleInsideImage(camera, rel.Inverse(), options.epipole_margin_px);
+    const bool is_forward = IsForwardPair(camera, rel, options.epipole_margin_px);
     // Rectified stereo searches a fixed disparity range; the plane sweep (forward pairs) does not.
     const double max_near_disparity =
         is_forward ? options.max_near_disparity_sweep_px : options.max_near_disparity_px;

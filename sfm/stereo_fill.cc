@@ -310,6 +310,11 @@ bool EpipoleInsideImage(const Camera& camera, const SE3& a_from_b, double margin
          v < camera.height + margin_px;
 }
 
+bool IsForwardPair(const Camera& camera, const SE3& key1_from_key2, double margin_px) {
+  return EpipoleInsideImage(camera, key1_from_key2, margin_px) ||
+         EpipoleInsideImage(camera, key1_from_key2.Inverse(), margin_px);
+}
+
 bool StereoFillOptions::Check(std::string* message) const {
   auto fail = [&](const char* m) {
     if (message) *message = m;
@@ -367,18 +372,13 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     result.termination = "baseline too short";
     return result;
   }
-  const bool forward =
-      EpipoleInsideImage(camera, key1_from_key2, options.epipole_margin_px) ||
-      EpipoleInsideImage(camera, key1_from_key2.Inverse(), options.epipole_margin_px);
+  const bool forward = IsForwardPair(camera, key1_from_key2, options.epipole_margin_px);
   if (forward && !options.plane_sweep_forward) {
     result.termination = "forward motion (epipole inside the image)";
     return result;
   }
   const PhotometricCheck photometric(key1, third, camera, options);
-  const Holes holes = FindHoles(key1.hole_mask);
   result.third_view_used = photometric.active();
-  std::vector<float> errors, errors_m;  // stereo vs sensor on measured pixels, over all methods
-  bool agrees = false;                  // some method agreed with the sensor
   const bool sgbm = !forward && !options.plane_sweep_always;
   // The depth range that stereo searches: what the sensor measures in keyframe 1 (2nd to 98th
   // percentile), widened by a quarter, within [min_depth_m, max_depth_m].
@@ -394,6 +394,9 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     result.termination = "measured depth outside [min_depth_m, max_depth_m]";
     return result;
   }
+  const Holes holes = FindHoles(key1.hole_mask);
+  std::vector<float> errors, errors_m;  // stereo vs sensor on measured pixels, over all methods
+  bool agrees = false;                  // some method agreed with the sensor
   if (sgbm) {
     cv::Mat stereo = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
     // Stereo runs with the left camera of the pair first; when that is keyframe 2, its points are
@@ -443,7 +446,7 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
       if (third.frame != nullptr) views.push_back({third.frame, third.key1_from_key3});
       const PlaneSweepResult sweep =
           SweepDepth(key1, views, camera, region, near, far, options.plane_sweep);
-      result.method = sgbm ? "rectified SGBM + plane sweep" : "plane sweep";
+      if (sgbm) result.method = "rectified SGBM + plane sweep";
       sweep.depth.copyTo(result.stereo_depth, result.stereo_depth == 0.f);
       agrees |= ValidateAndFill(sweep.depth, key1, holes, photometric, options, &result, &errors,
                                 &errors_m);

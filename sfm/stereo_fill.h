@@ -109,6 +109,10 @@ struct StereoFillResult {
 // block matching finds no usable disparity. Checks a's image only; call it both ways round.
 bool EpipoleInsideImage(const Camera& camera, const SE3& a_from_b, double margin_px);
 
+// A forward pair: the epipole lies inside (or within margin_px of) either keyframe's image, so
+// rectified stereo cannot serve it (EpipoleInsideImage both ways round).
+bool IsForwardPair(const Camera& camera, const SE3& key1_from_key2, double margin_px);
+
 // key1/key2: colour (BGR) and metric depth with hole masks; key1_from_key2 maps points from
 // keyframe 2's camera into keyframe 1's. Both frames use `camera`.
 StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
