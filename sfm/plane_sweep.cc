@@ -90,6 +90,27 @@ GF_VECTOR_CLONES void AccumulateCorrelation(const float* m, int n, float inv_are
   }
 }
 
+// One row of the cost volume from the correlation sums of all views (sum, count, seen as
+// AccumulateCorrelation leaves them; var_i: keyframe 1's window variance): textureless_cost where
+// no view sees the window or keyframe 1's window is flat; 100 where it is textured and flat in
+// every view (no match); else 100 (1 - mean NCC), plus 0.5 (so that truncation rounds). Branch-free
+// (a clamp here would not vectorise: the caller clamps).
+GF_VECTOR_CLONES void CostRow(const float* __restrict sum, const float* __restrict count,
+                              const float* __restrict var_i, const float* __restrict seen, int n,
+                              float min_var, float textureless_cost, float* __restrict out) {
+  for (int x = 0; x < n; ++x) {
+    // No textured view (count 0, so sum 0): 100. (A ternary: std::max would not vectorise.)
+    const float views = count[x] < 1.f ? 1.f : count[x];
+    const float matched = 100.f * (1.f - sum[x] / views);
+    // A blend, not a select of `matched`: the compiler would move the division under the
+    // condition, and a conditional division does not vectorise.
+    const float seen_here = seen[x] > 0.f ? 1.f : 0.f;
+    const float textured = var_i[x] > min_var ? seen_here : 0.f;
+    const float value = textureless_cost + textured * (matched - textureless_cost);
+    out[x] = value + 0.5f;  // truncated (and clamped) by the caller: rounded
+  }
+}
+
 // Where the pixels (x, y), x < n, of a row map through the homography h (row-major): the
 // homography is affine along a row up to the division. Behind the camera, or with a homography that
 // is not finite: -1, outside every image.
@@ -143,59 +164,105 @@ GF_VECTOR_CLONES void SampleRow(const ViewData& view, const float* __restrict u_
   }
 }
 
+// The hole channels of a sampled row: the four channels (each `padded` apart) weighted by the
+// hole share h of keyframe 1's coverage instead of the coverage c, which is 0 or 1: c h = h.
+GF_VECTOR_CLONES void WeightByHoles(const float* __restrict h, int n, size_t padded,
+                                    float* __restrict channels) {
+  for (int c = 0; c < 4; ++c) {
+    const float* in = channels + static_cast<size_t>(c) * padded;
+    float* out = channels + static_cast<size_t>(c + 4) * padded;
+    for (int x = 0; x < n; ++x) out[x] = in[x] * h[x];
+  }
+}
+
+// Per pixel, the hole channels (4..7 of m) where use_hole is 1, else the full ones (0..3) (use_hole
+// is 0 or 1): out holds 4 channels of n values. Arithmetic, so that it vectorises.
+GF_VECTOR_CLONES void SelectWindows(const float* __restrict m, const float* __restrict use_hole,
+                                    int n, float* __restrict out) {
+  for (int c = 0; c < 4; ++c) {
+    const float* full = m + static_cast<size_t>(c) * n;
+    const float* hole = m + static_cast<size_t>(c + 4) * n;
+    float* o = out + static_cast<size_t>(c) * n;
+    for (int x = 0; x < n; ++x) o[x] = use_hole[x] * hole[x] + (1.f - use_hole[x]) * full[x];
+  }
+}
+
+// sum[i] += sign * row[i] for i < n (vectorises).
+GF_VECTOR_CLONES void Accumulate(const float* __restrict row, size_t n, float sign,
+                                 float* __restrict sum) {
+  for (size_t i = 0; i < n; ++i) sum[i] += sign * row[i];
+}
+
 // Window sums of one view's warped grey level J for a plane, one output row at a time: J is
 // sampled bilinearly through the plane's homography (key1 pixel -> view pixel), then summed over
 // window x window pixels (zero outside the ROI, as a constant-border box filter). The four sums:
-// J c, J^2 c, J I c and the view's coverage c (c: keyframe 1's coverage, I: its grey level).
-// Direct sums (no running sums) keep float rounding from drifting along rows and columns.
+// J c, J^2 c, J I c and the view's coverage c (c: keyframe 1's coverage, I: its grey level); with
+// a hole weight h (keyframe 1's hole share of c, c being 0 or 1), four more with h in place of c,
+// for windows that use hole pixels only. Rows are summed directly; columns by running sums that
+// are redone directly every kExactEvery rows, so float rounding cannot drift.
 class WindowSums {
  public:
-  WindowSums(int rows, int cols, int window)
+  WindowSums(int rows, int cols, int window, bool holes)
       : rows_(rows),
         cols_(cols),
         window_(window),
         half_(window / 2),
+        channels_(holes ? 8 : 4),
         padded_(cols + 2 * (window / 2)),
-        sample_(4 * padded_, 0.f),
-        ring_(static_cast<size_t>(window) * 4 * cols, 0.f),
-        sums_(4 * cols),
+        sample_(static_cast<size_t>(channels_) * padded_, 0.f),
+        ring_(static_cast<size_t>(window) * channels_ * cols, 0.f),
+        sums_(static_cast<size_t>(channels_) * cols),
         u_(cols),
         v_(cols) {}
 
   // Runs over the ROI for one view and plane; calls row_done(y, sums) for every output row y,
-  // sums holding the 4 channels of `cols` values each (channel-major).
+  // sums holding the 4 (or 8, with holes) channels of `cols` values each (channel-major).
+  // h_roi: the hole weights, used only when the object was made with holes.
   template <typename RowDone>
   void Run(const ViewData& view, const Eigen::Matrix3d& key1_to_view, const cv::Mat& i_roi,
-           const cv::Mat& c_roi, RowDone row_done) {
+           const cv::Mat& c_roi, const cv::Mat& h_roi, RowDone row_done) {
     std::fill(ring_.begin(), ring_.end(), 0.f);
     float h[9];
     for (int i = 0; i < 9; ++i) h[i] = static_cast<float>(key1_to_view(i / 3, i % 3));
     const bool finite = key1_to_view.allFinite();
+    const size_t row_values = static_cast<size_t>(channels_) * cols_;
+    std::fill(sums_.begin(), sums_.end(), 0.f);
     for (int y = 0; y < rows_ + half_; ++y) {
-      float* slot = &ring_[static_cast<size_t>(y % window_) * 4 * cols_];
+      // The slot of the row that leaves the window (zero for the first rows).
+      float* slot = &ring_[static_cast<size_t>(y % window_) * row_values];
+      const int out_row = y - half_;
+      const bool exact = out_row % kExactEvery == 0;  // direct sums this row, else running ones
+      if (!exact) Accumulate(slot, row_values, -1.f, sums_.data());
       if (y < rows_) {
         SamplePositions(h, finite, y, cols_, u_.data(), v_.data());
         float* jc = &sample_[half_];
         SampleRow(view, u_.data(), v_.data(), cols_, i_roi.ptr<float>(y), c_roi.ptr<float>(y), jc,
                   jc + padded_, jc + 2 * padded_, jc + 3 * padded_);
-        for (int c = 0; c < 4; ++c)
+        if (channels_ == 8) WeightByHoles(h_roi.ptr<float>(y), cols_, padded_, jc);
+        for (int c = 0; c < channels_; ++c)
           SumWindows(&sample_[static_cast<size_t>(c) * padded_], 1, window_, cols_,
                      slot + static_cast<size_t>(c) * cols_);
       } else {
-        std::fill(slot, slot + 4 * cols_, 0.f);
+        std::fill(slot, slot + row_values, 0.f);
       }
-      const int out_row = y - half_;
-      if (out_row < 0) continue;
       // The ring holds rows out_row - half .. out_row + half (in rotated order).
-      SumWindows(ring_.data(), 4 * cols_, window_, 4 * cols_, sums_.data());
+      if (exact)
+        SumWindows(ring_.data(), row_values, window_, static_cast<int>(row_values), sums_.data());
+      else
+        Accumulate(slot, row_values, 1.f, sums_.data());
+      if (out_row < 0) continue;
       row_done(out_row, sums_.data());
     }
   }
 
  private:
-  int rows_, cols_, window_, half_, padded_;
-  std::vector<float> sample_;  // 4 channels of one ROI row, padded by half a window each side
-  std::vector<float> ring_;    // the last `window` rows' horizontal sums, 4 channels each
+  // Vertical sums run (add the row that enters, subtract the one that leaves) and are summed
+  // directly every kExactEvery-th row, which bounds float drift to a few roundings.
+  static constexpr int kExactEvery = 8;
+  int rows_, cols_, window_, half_, channels_;
+  size_t padded_;
+  std::vector<float> sample_;  // the channels of one ROI row, padded by half a window each side
+  std::vector<float> ring_;    // the last `window` rows' horizontal sums, all channels
   std::vector<float> sums_, u_, v_;
 };
 
@@ -381,14 +448,40 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
   roi &= cv::Rect(0, 0, work.width, work.height);
   const cv::Size box(options.window_px, options.window_px);
   const cv::Mat i_roi = gray1(roi), c_roi = cover1(roi);
-  cv::Mat n1, mean_i, var_i;  // window means weighted by keyframe 1's coverage
-  cv::boxFilter(c_roi, n1, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_CONSTANT);
-  cv::boxFilter(i_roi, mean_i, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_CONSTANT);
-  cv::boxFilter(i_roi.mul(i_roi), var_i, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_CONSTANT);
-  cv::max(n1, 1e-6, n1);
-  cv::divide(mean_i, n1, mean_i);
-  cv::divide(var_i, n1, var_i);
-  var_i -= mean_i.mul(mean_i);
+  // Keyframe 1's window statistics for window weights w: the weighted share of the window (n1),
+  // mean and variance of its grey level.
+  auto window_statistics = [&](const cv::Mat& w, cv::Mat* n1, cv::Mat* mean, cv::Mat* var) {
+    const cv::Mat iw = i_roi.mul(w);
+    cv::boxFilter(w, *n1, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_CONSTANT);
+    cv::boxFilter(iw, *mean, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_CONSTANT);
+    cv::boxFilter(iw.mul(i_roi), *var, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_CONSTANT);
+    cv::max(*n1, 1e-6, *n1);
+    cv::divide(*mean, *n1, *mean);
+    cv::divide(*var, *n1, *var);
+    *var -= mean->mul(*mean);
+  };
+  cv::Mat n1, mean_i, var_i;  // weighted by keyframe 1's coverage
+  window_statistics(c_roi, &n1, &mean_i, &var_i);
+  // Hole windows: a hole pixel's window uses the hole pixels only (weights h_roi, keyframe 1's
+  // hole share of its coverage), where they fill at least min_window_inside of it; its statistics
+  // replace the full window's there (use_hole 1).
+  cv::Mat h_roi, use_hole;
+  if (options.hole_windows) {
+    cv::Mat holes_full = undistort(key1.hole_mask != 0, cv::INTER_NEAREST), holes;
+    holes_full.convertTo(holes_full, CV_32F, 1.0 / 255);
+    cv::resize(holes_full, holes, work, 0, 0, cv::INTER_AREA);
+    h_roi = holes(roi).mul(c_roi);
+    cv::Mat n1_hole, mean_hole, var_hole;
+    window_statistics(h_roi, &n1_hole, &mean_hole, &var_hole);
+    const cv::Mat selected = (h_roi >= 0.5f) & (n1_hole >= options.min_window_inside);
+    if (cv::countNonZero(selected) > 0) {
+      selected.convertTo(use_hole, CV_32F, 1.0 / 255);
+      n1_hole.copyTo(n1, selected);
+      mean_hole.copyTo(mean_i, selected);
+      var_hole.copyTo(var_i, selected);
+    }
+  }
+  const bool hole_windows = !use_hole.empty();
   const double min_var = options.min_texture * options.min_texture;
 
   // Planes evenly spaced in inverse depth, close enough that no pixel jumps more than max_step_px.
@@ -407,12 +500,23 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
   shift(0, 2) = roi.x;
   shift(1, 2) = roi.y;
   cv::Mat sum(rows, cols, CV_32F), count(rows, cols, CV_32F), seen(rows, cols, CV_32F);
-  WindowSums window_sums(rows, cols, options.window_px);
+  WindowSums window_sums(rows, cols, options.window_px, hole_windows);
+  std::vector<float> selected(hole_windows ? 4 * cols : 0);
   const float inv_area = 1.f / (options.window_px * options.window_px);
   const float min_var_f = static_cast<float>(min_var);
   const float min_inside = static_cast<float>(options.min_window_inside);
   const float neutral = static_cast<float>(options.textureless_cost);
-  std::vector<uint8_t> row_cost(cols);
+  // Costs are written plane-major for a block of planes, then moved into the pixel-major volume
+  // a block at a time (contiguous bytes per pixel instead of one scattered byte per plane).
+  constexpr int kBlock = 16;
+  std::vector<uint8_t> block(static_cast<size_t>(kBlock) * pixels);
+  std::vector<float> row_cost(cols);
+  auto flush_block = [&](int first_plane, int count_planes) {
+    for (size_t p = 0; p < pixels; ++p) {
+      uint8_t* out = &cost[p * planes + first_plane];
+      for (int b = 0; b < count_planes; ++b) out[b] = block[b * pixels + p];
+    }
+  };
   for (int plane = 0; plane < planes; ++plane) {
     const double w = w_far + plane * dw;
     sum.setTo(0.f);
@@ -422,28 +526,26 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
       Eigen::Matrix3d h = v.rotation;
       h.col(2) += v.translation * w;  // R + t n^T / z with n = (0, 0, 1)
       // Correlation over keyframe 1's covered pixels of each window.
-      window_sums.Run(v, k * h * k_inv * shift, i_roi, c_roi, [&](int y, const float* m) {
+      window_sums.Run(v, k * h * k_inv * shift, i_roi, c_roi, h_roi, [&](int y, const float* m) {
+        if (hole_windows) {
+          SelectWindows(m, use_hole.ptr<float>(y), cols, selected.data());
+          m = selected.data();
+        }
         AccumulateCorrelation(m, cols, inv_area, min_inside, min_var_f, n1.ptr<float>(y),
                               mean_i.ptr<float>(y), var_i.ptr<float>(y), sum.ptr<float>(y),
                               count.ptr<float>(y), seen.ptr<float>(y));
       });
     }
+    uint8_t* plane_cost = &block[static_cast<size_t>(plane % kBlock) * pixels];
     for (int y = 0; y < rows; ++y) {
-      const float* s = sum.ptr<float>(y);
-      const float* c = count.ptr<float>(y);
-      const float* vi = var_i.ptr<float>(y);
-      const float* sn = seen.ptr<float>(y);
-      // textureless_cost where no view sees the window or keyframe 1's window is flat; 100 where
-      // it is textured and flat in every view (no match); else 100 (1 - mean NCC), rounded.
-      for (int x = 0; x < cols; ++x) {
-        const float textured_here = (sn[x] > 0.f) & (vi[x] > min_var_f);
-        const float matched = c[x] > 0.f ? 100.f * (1.f - s[x] / std::max(c[x], 1.f)) : 100.f;
-        const float value = textured_here ? matched : neutral;
-        row_cost[x] = static_cast<uint8_t>(std::clamp(value, 0.f, 200.f) + 0.5f);
-      }
-      uint8_t* out = &cost[static_cast<size_t>(y) * cols * planes + plane];
-      for (int x = 0; x < cols; ++x) out[static_cast<size_t>(x) * planes] = row_cost[x];
+      CostRow(sum.ptr<float>(y), count.ptr<float>(y), var_i.ptr<float>(y), seen.ptr<float>(y), cols,
+              min_var_f, neutral, row_cost.data());
+      uint8_t* out = plane_cost + static_cast<size_t>(y) * cols;
+      for (int x = 0; x < cols; ++x)
+        out[x] = static_cast<uint8_t>(std::clamp(static_cast<int>(row_cost[x]), 0, 200));
     }
+    if (plane % kBlock == kBlock - 1 || plane == planes - 1)
+      flush_block(plane - plane % kBlock, plane % kBlock + 1);
   }
 
   // Aggregation along 8 paths (or none), then the best plane per pixel.

@@ -6,7 +6,9 @@
 // requested depth range; for each plane the other views are warped into keyframe 1 by the plane's
 // homography (on undistorted images shrunk by `downscale`) and compared with keyframe 1 by
 // zero-mean normalised cross-correlation over a window (window sums per row, fused with the warp in
-// loops that vectorise; windows weighted by keyframe 1's coverage, so they may cross its border).
+// loops that vectorise; windows weighted by keyframe 1's coverage, so they may cross its border;
+// a hole pixel's window uses hole pixels only, so a measured surface's texture next to the hole
+// does not carry its depth into it).
 // The cost 1 - mean NCC over the views that see a pixel is aggregated along 8 image paths
 // (semi-global matching); each pixel takes the plane of least aggregated cost, refined to sub-plane
 // precision by a parabola. A pixel gets a depth only when its window has texture, the correlation
@@ -49,6 +51,10 @@ struct PlaneSweepOptions {
   int smooth_large = 40;
   int downscale = 2;          // sweep on images shrunk by this factor (1: full size)
   int textureless_cost = 30;  // cost of every plane where keyframe 1's window has no texture
+  // Windows of hole pixels use hole pixels only (where they fill min_window_inside of the
+  // window): a measured surface's texture then cannot carry its depth into the hole next to it
+  // (foreground fattening, e.g. a label's depth onto the clear glass below it).
+  bool hole_windows = true;
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -180,19 +181,27 @@ bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1, const Hole
   StereoFillResult& result = *r;
   cv::Mat stereo = stereo_in.clone();
   // Block matching spreads a textured surface's depth over the textureless pixels next to it
-  // (foreground fattening); drop stereo depth within edge_margin_px of a depth discontinuity.
-  if (options.edge_margin_px > 0) {
-    cv::Mat edges = cv::Mat::zeros(stereo.size(), CV_8UC1);
-    for (int y = 0; y + 1 < stereo.rows; ++y)
-      for (int x = 0; x + 1 < stereo.cols; ++x) {
-        const float s = stereo.at<float>(y, x);
-        for (float n : {stereo.at<float>(y, x + 1), stereo.at<float>(y + 1, x)})
-          if (s > 0 && n > 0 && std::abs(s - n) > options.edge_jump * std::min(s, n))
-            edges.at<uint8_t>(y, x) = 255;
-      }
-    const int k = 2 * options.edge_margin_px + 1;
-    cv::dilate(edges, edges, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
-    stereo.setTo(0.f, edges);
+  // (foreground fattening): drop stereo depth with a farther stereo depth within
+  // edge_margin_near_px (the near side of a discontinuity) or a nearer one within edge_margin_px.
+  // Max/min filters over the window, so that a gap in the stereo (pixels the left-right check
+  // dropped) does not hide the discontinuity.
+  if (options.edge_margin_px > 0 || options.edge_margin_near_px > 0) {
+    auto square = [](int r) {
+      return cv::getStructuringElement(cv::MORPH_RECT, {2 * r + 1, 2 * r + 1});
+    };
+    cv::Mat farthest, nearest = stereo.clone();
+    nearest.setTo(std::numeric_limits<float>::max(), stereo <= 0.f);
+    cv::dilate(stereo, farthest, square(options.edge_margin_near_px));
+    cv::erode(nearest, nearest, square(options.edge_margin_px));
+    const float up = static_cast<float>(1.0 + options.edge_jump),
+                down = static_cast<float>(1.0 - options.edge_jump);
+    for (int y = 0; y < stereo.rows; ++y) {
+      float* s = stereo.ptr<float>(y);
+      const float* f = farthest.ptr<float>(y);
+      const float* n = nearest.ptr<float>(y);
+      for (int x = 0; x < stereo.cols; ++x)
+        if (f[x] > s[x] * up || n[x] < s[x] * down) s[x] = 0.f;
+    }
   }
 
   // Validation against the sensor: over the image, and in a ring around each hole.
@@ -328,6 +337,8 @@ bool StereoFillOptions::Check(std::string* message) const {
   if (!(rectify_alpha >= -1 && rectify_alpha <= 1)) return fail("rectify_alpha must be in [-1, 1]");
   if (!(max_lr_difference_px >= 0) || !(min_depth_m > 0) || !(max_depth_m > min_depth_m))
     return fail("need lr difference >= 0 and 0 < min_depth_m < max_depth_m");
+  if (edge_margin_px < 0 || edge_margin_near_px < 0 || !(edge_jump > 0))
+    return fail("edge margins must be >= 0 and edge_jump positive");
   if (ring_px < 1 || min_ring_samples < 1 || ring_cell_px < 0 || !(max_ring_error > 0) ||
       !(max_pair_error > 0))
     return fail("ring and error thresholds must be positive");
