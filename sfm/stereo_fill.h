@@ -63,9 +63,12 @@ struct StereoFillOptions {
   bool ring_scale_correction = true;  // scale each hole's stereo by its ring's sensor/stereo ratio
   double max_ring_scale = 0.10;       // ... when that ratio is within 1 +- this
   double max_pair_error = 0.08;       // median relative error over the whole image: else reject
-  int edge_margin_px = 2;       // drop stereo depth this close to a depth discontinuity, pixels
-  int edge_margin_near_px = 3;  // ... on its near side (foreground fattening), pixels
-  double edge_jump = 0.05;      // relative depth step that counts as a discontinuity
+  // Stereo depth next to a depth step is dropped: within edge_margin_px of a nearer stereo depth
+  // (the step's far side) and within edge_margin_near_px of a farther one (its near side, which
+  // block matching spreads: foreground fattening). Pixels.
+  int edge_margin_px = 2;
+  int edge_margin_near_px = 3;
+  double edge_jump = 0.05;  // relative depth step that counts as a discontinuity
   // Photometric check in a third keyframe (when one is given).
   int photometric_patch_px = 7;  // patch side for the comparison, pixels (odd)
   double min_ncc = 0.5;          // textured patches must correlate at least this much
