@@ -63,17 +63,19 @@ Eigen::Matrix4d ToEigen(const cv::Mat& m) {
 }
 
 // OpenCV's StereoSGBM alone on a rectified pair (the dense-stereo step without our range, checks
-// and validation): 128 disparities, the other SGBM settings of StereoFillOptions' defaults.
+// and validation): the full num_disparities from 0 and the other SGBM and rectification settings
+// of StereoFillOptions' defaults.
 // Returns milliseconds.
 double TimeOpenCvSgbm(const RgbdFrame& a, const RgbdFrame& b, const Camera& camera,
                       const SE3& b_from_a) {
   const auto t0 = Clock::now();
+  const StereoFillOptions o;
   cv::Mat r, t, r1, r2, p1, p2, q;
   cv::eigen2cv(b_from_a.RotationMatrix(), r);
   cv::eigen2cv(Eigen::Vector3d(b_from_a.translation()), t);
   const cv::Size size(camera.width, camera.height);
   cv::stereoRectify(camera.CvK(), camera.CvDistortion(), camera.CvK(), camera.CvDistortion(), size,
-                    r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, 0, size);
+                    r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, o.rectify_alpha, size);
   cv::Mat gray_a, gray_b, map_x, map_y, rect_a, rect_b, disparity;
   cv::cvtColor(a.color, gray_a, cv::COLOR_BGR2GRAY);
   cv::cvtColor(b.color, gray_b, cv::COLOR_BGR2GRAY);
@@ -83,11 +85,11 @@ double TimeOpenCvSgbm(const RgbdFrame& a, const RgbdFrame& b, const Camera& came
   cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r2, p2, size, CV_16SC2, map_x,
                               map_y);
   cv::remap(gray_b, rect_b, map_x, map_y, cv::INTER_LINEAR);
-  const StereoFillOptions o;
   const int bs = o.block_size;
-  cv::StereoSGBM::create(
-      0, 128, bs, 8 * bs * bs, 32 * bs * bs, static_cast<int>(std::lround(o.max_lr_difference_px)),
-      63, o.uniqueness_ratio, o.speckle_window, o.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY)
+  cv::StereoSGBM::create(0, o.num_disparities, bs, 8 * bs * bs, 32 * bs * bs,
+                         static_cast<int>(std::lround(o.max_lr_difference_px)), 63,
+                         o.uniqueness_ratio, o.speckle_window, o.speckle_range,
+                         cv::StereoSGBM::MODE_SGBM_3WAY)
       ->compute(rect_a, rect_b, disparity);
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }

@@ -149,6 +149,7 @@ void RunDemo(const DemoOptions& options) {
   std::vector<size_t> fill_holes(5, 0), fill_filled(5, 0), fill_good(5, 0);
   // Filled clear-glass pixels that take the glass's own depth instead of the background's (what
   // the colour camera sees through it): the goal is none.
+  const int clear_glass = static_cast<int>(synth::Material::kClearGlass);
   size_t clear_glass_at_glass_depth = 0;
   std::vector<std::vector<float>> fill_errors(5);
   std::string overlay_ts;
@@ -185,9 +186,9 @@ void RunDemo(const DemoOptions& options) {
         const double e = std::abs(z - t) / t;
         fill_errors[m].push_back(static_cast<float>(e));
         fill_good[m] += e <= 0.03;
-        const double glass = first_surface.at<uint16_t>(v, u) / truth_scale;
-        clear_glass_at_glass_depth += m == static_cast<int>(synth::Material::kClearGlass) &&
-                                      std::abs(z - glass) < 0.02 * glass && e > 0.05;
+        clear_glass_at_glass_depth +=
+            m == clear_glass &&
+            synth::AtClearGlassDepth(z, first_surface.at<uint16_t>(v, u) / truth_scale, t);
       }
     if (filled_here > best_filled) {
       best_filled = filled_here;
@@ -282,7 +283,7 @@ void RunDemo(const DemoOptions& options) {
   html << "</table><p>Filled clear-glass pixels that take the glass's depth instead of the "
           "background's (within 2% of the glass, more than 5% off the background; the goal is "
           "none): "
-       << clear_glass_at_glass_depth << " of " << fill_filled[4] << ".</p>";
+       << clear_glass_at_glass_depth << " of " << fill_filled[clear_glass] << ".</p>";
   if (!overlay_ts.empty())
     html << "<p>Keyframe " << overlay_ts
          << ": filled pixels green (brighter = more confident), "

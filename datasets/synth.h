@@ -22,6 +22,7 @@
 //   synth.json                                  scene, seed, options, generation time
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <opencv2/core.hpp>
@@ -69,6 +70,14 @@ struct SynthFrame {
   cv::Mat label;          // CV_8UC1 Material of the first hit, kNoSurface where none
   cv::Mat hole_reason;    // CV_8UC1 HoleCode: why raw_disparity is 2047
 };
+
+// Whether a depth filled in on a clear-glass pixel is "reported as glass": within 2% of the
+// glass's own depth (true_depth) and more than 5% off the background the colour camera sees
+// through it (visible_depth); where the two are within a few percent they cannot be told apart.
+// Stereo hole filling should give the background: the goal is no such pixel.
+inline bool AtClearGlassDepth(double fill, double glass, double background) {
+  return std::abs(fill - glass) < 0.02 * glass && std::abs(fill - background) > 0.05 * background;
+}
 
 // The camera every synthetic dataset uses (640x480, fx = fy = 525, no distortion).
 Camera SynthCamera();

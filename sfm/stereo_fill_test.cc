@@ -57,11 +57,8 @@ FillScore Score(const Rendered& a, const StereoFillResult& r) {
       f.errors.push_back(std::abs(fill - truth) / truth);
       if (label == static_cast<int>(synth::Material::kClearGlass)) {
         ++f.clear_glass_filled;
-        const double glass = a.truth.true_depth.at<float>(y, x);
-        // "Reported as glass": the fill matches the glass surface and not the background seen
-        // through it (where the two are within a few percent they cannot be told apart).
         f.clear_glass_as_glass +=
-            std::abs(fill - glass) < 0.02 * glass && std::abs(fill - truth) > 0.05 * truth;
+            synth::AtClearGlassDepth(fill, a.truth.true_depth.at<float>(y, x), truth);
       }
     }
   }
