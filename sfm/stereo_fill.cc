@@ -100,6 +100,7 @@ class PhotometricCheck {
     if (third.frame == nullptr || third.frame->color.empty()) return;
     cv::cvtColor(key1.color, gray1_, cv::COLOR_BGR2GRAY);
     cv::cvtColor(third.frame->color, gray3_, cv::COLOR_BGR2GRAY);
+    holes1_ = key1.hole_mask;
     key3_from_key1_ = third.key1_from_key3.Inverse();
   }
   bool active() const { return !gray3_.empty(); }
@@ -119,12 +120,20 @@ class PhotometricCheck {
     if (x - r < 0 || y - r < 0 || x + r >= gray1_.cols || y + r >= gray1_.rows) return 1.0;
     const float sensor3 = third_.frame->depth.at<float>(qy, qx);
     if (sensor3 > 0 && sensor3 < p3.z() * (1.0 - options_.occlusion_margin)) return 1.0;
+    // A hole pixel's patch uses keyframe 1's hole pixels only (photometric_hole_patches): a
+    // measured surface next to the hole (a label above clear glass) would otherwise make the patch
+    // match at that surface's depth.
+    const bool hole_only = options_.photometric_hole_patches && holes1_.at<uint8_t>(y, x) != 0;
     double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
-    const int count = (2 * r + 1) * (2 * r + 1);
+    int count = 0;
     for (int dy = -r; dy <= r; ++dy) {
+      const uint8_t* holes = holes1_.ptr<uint8_t>(y + dy) + x;
+      const uint8_t* a_row = gray1_.ptr<uint8_t>(y + dy) + x;
+      const uint8_t* b_row = gray3_.ptr<uint8_t>(qy + dy) + qx;
       for (int dx = -r; dx <= r; ++dx) {
-        const double a = gray1_.at<uint8_t>(y + dy, x + dx),
-                     b = gray3_.at<uint8_t>(qy + dy, qx + dx);
+        if (hole_only && holes[dx] == 0) continue;
+        const double a = a_row[dx], b = b_row[dx];
+        ++count;
         sa += a;
         sb += b;
         saa += a * a;
@@ -149,7 +158,7 @@ class PhotometricCheck {
   const Camera& camera_;
   const StereoFillOptions& options_;
   ThirdView third_;
-  cv::Mat gray1_, gray3_;
+  cv::Mat gray1_, gray3_, holes1_;
   SE3 key3_from_key1_;
 };
 

@@ -1,7 +1,8 @@
 # `glassfusion demo` end to end on the built-in glass scene (no datasets needed): the report is
 # written, the stereo fill reaches the glossy, dark and glass holes, and few filled clear-glass
 # pixels take the glass's own depth instead of the background seen through it (the goal is none;
-# measured 522 of 16423, 3.2%, with seed 1; 1187 of 17013, 7.0%, before hole windows).
+# measured 342 of 14509, 2.4%, with seed 1; 522 of 16423 with whole 7 px patches in the
+# third-view check, 1187 of 17013 before hole windows).
 set(work "${CMAKE_CURRENT_BINARY_DIR}/cli_demo_glass_tmp")
 file(REMOVE_RECURSE "${work}")
 execute_process(COMMAND "${GLASSFUSION}" demo --out "${work}" --data "${work}/no-datasets"
@@ -24,8 +25,8 @@ endforeach()
 string(JSON filled GET "${report}" fill_by_material clear_glass filled_pixels)
 string(JSON at_glass GET "${report}" clear_glass_filled_at_glass_depth)
 message("clear glass filled at the glass's depth: ${at_glass} of ${filled}")
-math(EXPR bound "${filled} / 25")
+math(EXPR bound "${filled} * 3 / 100")
 if(at_glass GREATER bound)
-  message(FATAL_ERROR "clear glass filled at the glass's depth: ${at_glass} of ${filled} (want <= 4%)")
+  message(FATAL_ERROR "clear glass filled at the glass's depth: ${at_glass} of ${filled} (want <= 3%)")
 endif()
 file(REMOVE_RECURSE "${work}")
