@@ -180,13 +180,14 @@ Holes FindHoles(const cv::Mat& hole_mask) {
 }
 
 // Validates one stereo depth image (keyframe 1's pixels, 0 = none) against the sensor and fills
-// the hole pixels that pass and are still empty in *result. Appends the stereo-vs-sensor errors
+// the hole pixels that pass, are still empty in *result and, when `fillable` is given (CV_8U),
+// non-zero there. Appends the stereo-vs-sensor errors
 // (relative, metres) on measured pixels. False, filling nothing, when the stereo disagrees with
 // the sensor over the whole image (median error above max_pair_error).
 bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1, const Holes& holes_of,
                      const PhotometricCheck& photometric, const StereoFillOptions& options,
-                     StereoFillResult* r, std::vector<float>* errors,
-                     std::vector<float>* errors_m) {
+                     StereoFillResult* r, std::vector<float>* errors, std::vector<float>* errors_m,
+                     const cv::Mat& fillable = cv::Mat()) {
   StereoFillResult& result = *r;
   cv::Mat stereo = stereo_in.clone();
   // Block matching spreads a textured surface's depth over the textureless pixels next to it
@@ -284,6 +285,7 @@ bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1, const Hole
         shadow_far = std::max(left, right);
       }
       if (result.fill_mask.at<uint8_t>(y, x)) continue;  // filled by an earlier method
+      if (!fillable.empty() && !fillable.at<uint8_t>(y, x)) continue;
       if (!(stereo.at<float>(y, x) > 0)) continue;
       const int hole = labels.at<int>(y, x);
       const size_t piece = piece_of(x, y, hole);
@@ -450,10 +452,15 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   }
   // Plane sweep: for forward pairs (rectification degenerates) or when asked for every pair, over
   // the holes and a validation ring around them; after SGBM (plane_sweep_after_sgbm), over the
-  // hole pixels it left empty. Within the depth range the sensor measures in keyframe 1.
+  // hole pixels SGBM found no depth for. Within the depth range the sensor measures in keyframe 1.
+  // Only those pixels are filled from the sweep; the rest of its region is the validation ring.
   if (!sgbm || options.plane_sweep_after_sgbm) {
     cv::Mat wanted = key1.hole_mask != 0;
-    if (sgbm) wanted &= result.fill_mask == 0;
+    // Where SGBM found a depth that the edge margins or the validation then dropped, the sweep
+    // would be a second try at an answer that passes: on clear glass, most often the glass's own
+    // depth instead of the background behind it (sweep_sgbm_rejects).
+    if (sgbm)
+      wanted &= options.sweep_sgbm_rejects ? result.fill_mask == 0 : result.stereo_depth == 0.f;
     // Projector shadows lie at depth discontinuities by definition, where the sweep's windows
     // carry the front surface's depth into the hole: left to SGBM unless asked for.
     if (!options.sweep_shadows) wanted &= key1.hole_mask != static_cast<uint8_t>(HoleCode::kShadow);
@@ -469,7 +476,7 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
       if (sgbm) result.method = "rectified SGBM + plane sweep";
       sweep.depth.copyTo(result.stereo_depth, result.stereo_depth == 0.f);
       agrees |= ValidateAndFill(sweep.depth, key1, holes, photometric, options, &result, &errors,
-                                &errors_m);
+                                &errors_m, wanted);
     }
   }
 

@@ -120,20 +120,28 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   EXPECT_EQ(cv::norm(d.filled_depth, a.frame.depth, cv::NORM_INF, measured), 0.0);
   const FillScore sd = Score(a, d);
   EXPECT_GT(d.filled_pixels, r3.filled_pixels) << r3.BriefReport();
-  // Measured: 89% of the glossy, dark and textured-glass holes filled, median error 0.44%, 90th
-  // percentile 1.8%; 3 of 1110 filled clear-glass pixels nearer the glass than the background.
-  EXPECT_GT(sd.fill_rate, 0.85);
+  // Measured: 85.4% of the glossy, dark and textured-glass holes filled, median error 0.42%, 90th
+  // percentile 1.5%; 1 of 974 filled clear-glass pixels nearer the glass than the background
+  // (87.5% and 3 of 1110 when the sweep also retries the pixels whose SGBM depth was dropped).
+  EXPECT_GT(sd.fill_rate, 0.82);
   EXPECT_LT(Percentile(sd.errors, 0.5), 0.01);
   EXPECT_LT(Percentile(sd.errors, 0.9), 0.03);
   EXPECT_LE(sd.clear_glass_as_glass, sd.clear_glass_filled / 100);
 
   // The sweep's hole windows (hole pixels correlate over hole pixels only) keep the printed
-  // label's depth off the clear glass below it: measured 28 of 1099 such pixels without them.
-  StereoFillOptions full_windows;
-  full_windows.plane_sweep.hole_windows = false;
-  const FillScore sf =
-      Score(a, FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, full_windows, third));
-  EXPECT_GT(sf.clear_glass_as_glass, 3 * sd.clear_glass_as_glass + 10);
+  // label's depth off the clear glass below it. Measured with the sweep also retrying the pixels
+  // whose SGBM depth was dropped (sweep_sgbm_rejects, where the sweep meets that glass most):
+  // 3 of 1110 with hole windows, 28 of 1099 without.
+  StereoFillOptions retry;
+  retry.sweep_sgbm_rejects = true;
+  StereoFillOptions retry_full_windows = retry;
+  retry_full_windows.plane_sweep.hole_windows = false;
+  const FillScore sr =
+      Score(a, FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, retry, third));
+  const FillScore sf = Score(
+      a, FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, retry_full_windows, third));
+  EXPECT_GT(sf.clear_glass_as_glass, 3 * sr.clear_glass_as_glass + 10);
+  EXPECT_LE(sd.clear_glass_as_glass, sr.clear_glass_as_glass);
 }
 
 TEST(FillHolesByStereo, RejectsShortBaselinesAndForwardMotion) {
