@@ -89,8 +89,8 @@ bool StereoPointsFromLeft(const cv::Mat& color_first, const cv::Mat& color_secon
 }
 
 // Photometric check of a filled pixel in a third keyframe: the filled point, projected into the
-// third view, must look like it does in keyframe 1 (NCC of small patches; mean grey levels for
-// textureless patches). Points the third view's sensor sees behind a nearer surface, or outside
+// third view, must look like it does in keyframe 1 (NCC of patches, a hole pixel's over hole
+// pixels only; mean grey levels for textureless patches). Points the third view's sensor sees behind a nearer surface, or outside
 // its image, cannot be checked and pass.
 class PhotometricCheck {
  public:
@@ -181,9 +181,9 @@ Holes FindHoles(const cv::Mat& hole_mask) {
 
 // Validates one stereo depth image (keyframe 1's pixels, 0 = none) against the sensor and fills
 // the hole pixels that pass, are still empty in *result and, when `fillable` is given (CV_8U),
-// non-zero there. Appends the stereo-vs-sensor errors
-// (relative, metres) on measured pixels. False, filling nothing, when the stereo disagrees with
-// the sensor over the whole image (median error above max_pair_error).
+// non-zero there. Appends the stereo-vs-sensor errors (relative, metres) on measured pixels.
+// False, filling nothing, when the stereo disagrees with the sensor over the whole image (median
+// error above max_pair_error).
 bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1, const Holes& holes_of,
                      const PhotometricCheck& photometric, const StereoFillOptions& options,
                      StereoFillResult* r, std::vector<float>* errors, std::vector<float>* errors_m,
