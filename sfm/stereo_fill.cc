@@ -90,8 +90,8 @@ bool StereoPointsFromLeft(const cv::Mat& color_first, const cv::Mat& color_secon
 
 // Photometric check of a filled pixel in a third keyframe: the filled point, projected into the
 // third view, must look like it does in keyframe 1 (NCC of patches, a hole pixel's over hole
-// pixels only; mean grey levels for textureless patches). Points the third view's sensor sees behind a nearer surface, or outside
-// its image, cannot be checked and pass.
+// pixels only; mean grey levels for textureless patches). Points the third view's sensor sees
+// behind a nearer surface, or outside its image, cannot be checked and pass.
 class PhotometricCheck {
  public:
   PhotometricCheck(const RgbdFrame& key1, const ThirdView& third, const Camera& camera,
