@@ -220,6 +220,7 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
   struct Geometry {
     int index;
     double baseline, rotation_deg;
+    bool forward;
   };
   // Key1's depth range (median and 5th percentile of its measured depth).
   const std::vector<float> depths = SortedDepthSample(key1.frame.depth, 4);
@@ -233,11 +234,12 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
   int too_short = 0, too_long = 0, too_rotated = 0, forward = 0;
   for (size_t i = 0; i < candidates.size(); ++i) {
     const SE3 rel = key1.world_from_camera.Inverse() * candidates[i]->world_from_camera;
-    const Geometry g{static_cast<int>(i), rel.TranslationNorm(), rel.RotationAngle() * kDegPerRad};
+    const bool is_forward = IsForwardPair(camera, rel, options.epipole_margin_px);
+    const Geometry g{static_cast<int>(i), rel.TranslationNorm(), rel.RotationAngle() * kDegPerRad,
+                     is_forward};
     // Parallax comes from the motion across key1's optical axis, or from all of it when forward
     // pairs go to the plane sweep.
     const double lateral = options.allow_forward ? g.baseline : rel.translation().head<2>().norm();
-    const bool is_forward = IsForwardPair(camera, rel, options.epipole_margin_px);
     // Rectified stereo searches a fixed disparity range; the plane sweep (forward pairs) does not.
     const double max_near_disparity =
         is_forward ? options.max_near_disparity_sweep_px : options.max_near_disparity_px;
@@ -255,7 +257,9 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
       in_range.push_back(g);
     }
   }
-  // Farthest first: the first candidate with enough matches is the partner, the next the third.
+  // Farthest first: the first candidate with enough matches is the partner, the next the third
+  // (for a forward partner with spread_third_view_forward: the rest are re-ordered farthest from
+  // the partner first).
   std::sort(in_range.begin(), in_range.end(),
             [](const Geometry& a, const Geometry& b) { return a.baseline > b.baseline; });
   // The tracked relative pose can be a few centimetres off; each candidate's pose is refined
@@ -264,8 +268,9 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
   const SE3 key1_from_world = key1.world_from_camera.Inverse();
   PoseRefinementOptions features_only = options.refine;
   features_only.photometric = false;  // dense alignment only for the chosen views, below
-  for (const Geometry& g : in_range) {
+  for (size_t n = 0; n < in_range.size(); ++n) {
     if (choice.evaluated >= options.max_evaluations) break;
+    const Geometry g = in_range[n];
     const PoseRefinement pose = RefinePairPose(
         key1, *candidates[g.index], camera,
         key1_from_world * candidates[g.index]->world_from_camera, options.match, features_only);
@@ -274,17 +279,24 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
       fewest_short = std::max(fewest_short, pose.inliers);
       continue;
     }
-    if (!choice.found) {
-      choice.found = true;
-      choice.partner = g.index;
-      choice.matches = pose.inliers;
-      choice.baseline_m = pose.key1_from_key2.TranslationNorm();
-      choice.rotation_deg = pose.key1_from_key2.RotationAngle() * kDegPerRad;
-      choice.partner_pose = pose;
-    } else {
+    if (choice.found) {
       choice.third = g.index;
       choice.third_pose = pose;
       break;
+    }
+    choice.found = true;
+    choice.partner = g.index;
+    choice.matches = pose.inliers;
+    choice.baseline_m = pose.key1_from_key2.TranslationNorm();
+    choice.rotation_deg = pose.key1_from_key2.RotationAngle() * kDegPerRad;
+    choice.partner_pose = pose;
+    if (g.forward && options.spread_third_view_forward) {
+      const Eigen::Vector3d partner_at = candidates[g.index]->world_from_camera.translation();
+      const auto from_partner = [&](const Geometry& c) {
+        return (candidates[c.index]->world_from_camera.translation() - partner_at).norm();
+      };
+      std::sort(in_range.begin() + n + 1, in_range.end(),
+                [&](const Geometry& a, const Geometry& b) { return from_partner(a) > from_partner(b); });
     }
   }
   if (options.refine.photometric) {

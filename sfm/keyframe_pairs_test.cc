@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "datasets/synth.h"
+#include "sfm/stereo_fill.h"
 
 namespace gf {
 namespace {
@@ -79,6 +80,39 @@ TEST_F(KeyframePairs, SchedulerPairsEveryKeyframeWithinTheLimits) {
     EXPECT_LT((truth.Inverse() * c.partner_pose.key1_from_key2).TranslationNorm(), 0.005);
   }
   EXPECT_GE(paired, static_cast<int>(frames.size()) - 1);
+}
+
+// Forward motion along the optical axis: the partner is the farthest keyframe behind; the third
+// view is the one in front (the farthest from the partner, with spread_third_view_forward), not
+// the partner's neighbour behind, which is what it gets without.
+TEST_F(KeyframePairs, ForwardPairGetsAThirdViewFarFromThePartner) {
+  const Camera camera = synth::SynthCamera();
+  const auto along_axis = [&](double metres) {
+    return poses_[10] * SE3::Exp((SE3::Tangent() << 0, 0, metres, 0, 0, 0).finished());
+  };
+  PairSelectionOptions options;
+  const auto key1 = MakeStereoKeyframe(0, Frame(10), poses_[10], camera, options.surf);
+  const std::vector<double> offsets = {-0.16, -0.12, -0.08, 0.06};
+  std::vector<std::shared_ptr<const StereoKeyframe>> candidates;
+  for (size_t i = 0; i < offsets.size(); ++i) {
+    const SE3 pose = along_axis(offsets[i]);
+    const RgbdFrame frame = synth::ToRgbdFrame(
+        synth::RenderFrame(scene_, camera, pose, {}, 5, 40 + static_cast<int>(i)), 40 + i);
+    candidates.push_back(MakeStereoKeyframe(1 + i, frame, pose, camera, options.surf));
+  }
+  ASSERT_TRUE(IsForwardPair(camera, poses_[10].Inverse() * along_axis(-0.16),
+                            options.epipole_margin_px));
+  const PairChoice spread = SelectPartner(*key1, candidates, camera, options);
+  ASSERT_TRUE(spread.found) << spread.reason;
+  EXPECT_EQ(spread.partner, 0) << spread.BriefReport();
+  EXPECT_EQ(spread.third, 3) << spread.BriefReport();
+  EXPECT_TRUE(spread.third_pose.success) << spread.third_pose.BriefReport();
+
+  options.spread_third_view_forward = false;
+  const PairChoice next = SelectPartner(*key1, candidates, camera, options);
+  ASSERT_TRUE(next.found) << next.reason;
+  EXPECT_EQ(next.partner, 0);
+  EXPECT_EQ(next.third, 1);
 }
 
 TEST(PairSelectionOptions, RejectsBadSettings) {
