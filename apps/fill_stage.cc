@@ -134,6 +134,8 @@ void FillStage::Process(const StereoJob& job) {
     const StereoFillResult r =
         FillHolesByStereo(key1, job.key2->frame, camera_, key1_from_key2, options_.stereo, third);
     k.partner = job.key2->frame.timestamp_text;
+    if (job.third) k.third = job.third->frame.timestamp_text;
+    k.method = r.method;
     k.baseline_m = job.choice.baseline_m;
     k.matches = job.choice.matches;
     k.third_view = r.third_view_used;
@@ -181,7 +183,10 @@ nlohmann::ordered_json FillStage::Report() const {
                                                   : nlohmann::ordered_json(k.partner)},
                     {"baseline_m", k.baseline_m},
                     {"matches", k.matches},
+                    {"third", k.third.empty() ? nlohmann::ordered_json()
+                                              : nlohmann::ordered_json(k.third)},
                     {"third_view", k.third_view},
+                    {"method", k.method},
                     {"hole_pixels", k.hole_pixels},
                     {"filled_pixels", k.filled_pixels},
                     {"fill_rate", k.hole_pixels ? double(k.filled_pixels) / k.hole_pixels : 0.0},

@@ -48,6 +48,8 @@ struct FillStageOptions {
 struct KeyframeFill {
   std::string timestamp;
   std::string partner;  // partner's timestamp, empty when none
+  std::string third;    // the third view's timestamp, empty when none
+  std::string method;   // StereoFillResult::method: "rectified SGBM", "plane sweep", ...
   std::string termination;
   double baseline_m = 0;
   int matches = 0;
