@@ -178,21 +178,21 @@ nlohmann::ordered_json FillStage::Report() const {
       ms.push_back(k.ms);
       if (k.filled_pixels > 0) errors.push_back(k.stereo_error_median_m);
     }
-    list.push_back({{"timestamp", k.timestamp},
-                    {"partner", k.partner.empty() ? nlohmann::ordered_json()
-                                                  : nlohmann::ordered_json(k.partner)},
-                    {"baseline_m", k.baseline_m},
-                    {"matches", k.matches},
-                    {"third", k.third.empty() ? nlohmann::ordered_json()
-                                              : nlohmann::ordered_json(k.third)},
-                    {"third_view", k.third_view},
-                    {"method", k.method},
-                    {"hole_pixels", k.hole_pixels},
-                    {"filled_pixels", k.filled_pixels},
-                    {"fill_rate", k.hole_pixels ? double(k.filled_pixels) / k.hole_pixels : 0.0},
-                    {"stereo_error_median_m", k.stereo_error_median_m},
-                    {"ms", k.ms},
-                    {"termination", k.termination}});
+    list.push_back(
+        {{"timestamp", k.timestamp},
+         {"partner",
+          k.partner.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(k.partner)},
+         {"baseline_m", k.baseline_m},
+         {"matches", k.matches},
+         {"third", k.third.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(k.third)},
+         {"third_view", k.third_view},
+         {"method", k.method},
+         {"hole_pixels", k.hole_pixels},
+         {"filled_pixels", k.filled_pixels},
+         {"fill_rate", k.hole_pixels ? double(k.filled_pixels) / k.hole_pixels : 0.0},
+         {"stereo_error_median_m", k.stereo_error_median_m},
+         {"ms", k.ms},
+         {"termination", k.termination}});
   }
   std::sort(ms.begin(), ms.end());
   return {

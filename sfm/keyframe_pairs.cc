@@ -295,8 +295,9 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
       const auto from_partner = [&](const Geometry& c) {
         return (candidates[c.index]->world_from_camera.translation() - partner_at).norm();
       };
-      std::sort(in_range.begin() + n + 1, in_range.end(),
-                [&](const Geometry& a, const Geometry& b) { return from_partner(a) > from_partner(b); });
+      std::sort(
+          in_range.begin() + n + 1, in_range.end(),
+          [&](const Geometry& a, const Geometry& b) { return from_partner(a) > from_partner(b); });
     }
   }
   if (options.refine.photometric) {

@@ -60,25 +60,25 @@ struct PoseRefinementOptions {
 struct PairSelectionOptions {
   int min_matches = 40;                // M: SURF matches the pair must share (PnP RANSAC inliers)
   int max_evaluations = 10;            // candidates matched at most per keyframe (farthest first)
-  // The third view of a forward pair (the plane sweep's second view): the acceptable candidate
-  // farthest from the partner (true), not the next one after it in order of baseline (usually the
-  // partner's neighbour, nearly the same view). Punched TUM 0:150, where every pair is forward:
-  // good fills 0.546 -> 0.604. Sideways pairs keep the next candidate: a far third view there
-  // raised synthetic good fills 71.9 -> 74.0% but also clear glass filled at the glass's depth
-  // (synthetic 29 -> 54 pixels, demo 138 -> 182), from the sweep after SGBM.
-  bool spread_third_view_forward = true;
   double min_baseline_m = 0.04;        // shorter baselines give too little parallax, metres
   double max_baseline_m = 0.50;        // longer ones change the view too much for block matching
   double min_median_disparity_px = 8;  // parallax at I1's median depth, pixels
   double max_near_disparity_px = 80;   // parallax at I1's near depth; keep <= the stereo search
   double max_near_disparity_sweep_px = 176;  // the same for forward pairs (plane sweep: no range;
                                              // longer baselines gave more parallax on TUM)
-  double epipole_margin_px = 40;       // epipole inside an image or this close: forward motion
-  bool allow_forward = true;           // forward pairs too (the stereo fill plane-sweeps them)
-  double max_rotation_deg = 20.0;      // largest angle between the two viewing directions, degrees
-  int window = 30;                     // earlier keyframes considered as partners
+  double epipole_margin_px = 40;   // epipole inside an image or this close: forward motion
+  bool allow_forward = true;       // forward pairs too (the stereo fill plane-sweeps them)
+  double max_rotation_deg = 20.0;  // largest angle between the two viewing directions, degrees
+  int window = 30;                 // earlier keyframes considered as partners
   int lookahead = 10;  // later keyframes waited for before a keyframe is paired (3 -> 10 raised
                        // good fills on punched TUM frames 0-40 from 0.32 to about 0.44)
+  // The third view of a forward pair (the plane sweep's second view): the acceptable candidate
+  // farthest from the partner (true), not the next one after it in order of baseline (usually the
+  // partner's neighbour, nearly the same view). Punched TUM 0:150, where every pair is forward:
+  // good fills 0.546 -> 0.598. Sideways pairs keep the next candidate: a far third view there
+  // raised synthetic good fills 71.9 -> 74.0% but also clear glass filled at the glass's depth
+  // (synthetic 29 -> 54 pixels, demo 138 -> 182), from the sweep after SGBM.
+  bool spread_third_view_forward = true;
   SurfOptions surf = [] {
     SurfOptions s;
     s.upright = true;

@@ -100,8 +100,8 @@ TEST_F(KeyframePairs, ForwardPairGetsAThirdViewFarFromThePartner) {
         synth::RenderFrame(scene_, camera, pose, {}, 5, 40 + static_cast<int>(i)), 40 + i);
     candidates.push_back(MakeStereoKeyframe(1 + i, frame, pose, camera, options.surf));
   }
-  ASSERT_TRUE(IsForwardPair(camera, poses_[10].Inverse() * along_axis(-0.16),
-                            options.epipole_margin_px));
+  ASSERT_TRUE(
+      IsForwardPair(camera, poses_[10].Inverse() * along_axis(-0.16), options.epipole_margin_px));
   const PairChoice spread = SelectPartner(*key1, candidates, camera, options);
   ASSERT_TRUE(spread.found) << spread.reason;
   EXPECT_EQ(spread.partner, 0) << spread.BriefReport();
