@@ -64,8 +64,7 @@ Eigen::Matrix4d ToEigen(const cv::Mat& m) {
 
 // OpenCV's StereoSGBM alone on a rectified pair (the dense-stereo step without our range, checks
 // and validation): the full num_disparities from 0 and the other SGBM and rectification settings
-// of StereoFillOptions' defaults.
-// Returns milliseconds.
+// of StereoFillOptions' defaults. Returns milliseconds.
 double TimeOpenCvSgbm(const RgbdFrame& a, const RgbdFrame& b, const Camera& camera,
                       const SE3& b_from_a) {
   const auto t0 = Clock::now();
