@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -21,6 +22,7 @@
 #include "acquisition/trajectory_metrics.h"
 #include "apps/progress.h"
 #include "registration/tracker.h"
+#include "sfm/fill_carry.h"
 #include "sfm/keyframe_pairs.h"
 #include "sfm/stereo_fill.h"
 
@@ -100,13 +102,31 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
   const int threads = cv::getNumThreads();
   cv::setNumThreads(1);
   KeyframePairScheduler scheduler(camera, PairSelectionOptions{});
-  std::vector<double> pair_ms, fill_ms, sgbm_ms;
-  long long holes = 0, filled = 0;
+  std::vector<double> pair_ms, fill_ms, carry_ms, sgbm_ms;
+  long long holes = 0, filled = 0, filled_with_carry = 0;
   int unpaired = 0;
   std::map<std::string, int> methods;
+  const FillCarryOptions carry_options;
+  std::deque<KeyframeFillPoints> earlier_fills;
+  // Carries the earlier keyframes' fills into this one (as the fill stage of reconstruct does).
+  auto carry = [&](const StereoKeyframe& key1, const StereoFillResult* own) {
+    std::vector<const KeyframeFillPoints*> earlier;
+    for (const KeyframeFillPoints& e : earlier_fills) earlier.push_back(&e);
+    const auto t0 = Clock::now();
+    const CarriedFillResult c =
+        CarryFills(key1.frame, key1.world_from_camera, own, earlier, camera, carry_options);
+    carry_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    filled_with_carry += c.filled_pixels;
+    earlier_fills.push_back(own ? FillPointsInWorld(*own, key1.world_from_camera, camera)
+                                : KeyframeFillPoints{});
+    while (static_cast<int>(earlier_fills.size()) > carry_options.max_keyframes)
+      earlier_fills.pop_front();
+  };
   auto process = [&](const StereoJob& job) {
     if (!job.key2) {
       ++unpaired;
+      holes += cv::countNonZero(job.key1->frame.hole_mask);
+      carry(*job.key1, nullptr);
       return;
     }
     const SE3& key1_from_key2 = job.choice.partner_pose.key1_from_key2;
@@ -118,6 +138,7 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
     fill_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     holes += r.hole_pixels;
     filled += r.filled_pixels;
+    carry(*job.key1, &r);
     ++methods[r.method.empty() ? r.termination : r.method];
     if (!IsForwardPair(camera, key1_from_key2, StereoFillOptions{}.epipole_margin_px))
       sgbm_ms.push_back(
@@ -144,7 +165,9 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
   j["pair_selection_median_ms"] = Median(pair_ms);  // features, matching, pose refinement
   j["median_ms"] = Median(fill_ms);                 // FillHolesByStereo
   j["max_ms"] = fill_ms.empty() ? 0.0 : *std::max_element(fill_ms.begin(), fill_ms.end());
-  j["fill_rate"] = holes ? static_cast<double>(filled) / holes : 0.0;
+  j["carry_median_ms"] = Median(carry_ms);                             // CarryFills, every keyframe
+  j["fill_rate"] = holes ? static_cast<double>(filled) / holes : 0.0;  // own stereo
+  j["fill_rate_with_carry"] = holes ? static_cast<double>(filled_with_carry) / holes : 0.0;
   j["methods"] = methods;
   j["opencv_sgbm_pairs"] = sgbm_ms.size();
   j["opencv_sgbm_median_ms"] =

@@ -138,10 +138,12 @@ void RegisterCommands(CLI::App& app) {
         const auto& f = j["stereo_fill"];
         std::printf(
             "stereo fill, one core: %d pairs, median %.1f ms/pair (max %.1f) after "
-            "%.1f ms pair selection, %.1f%% of hole pixels filled; OpenCV StereoSGBM "
+            "%.1f ms pair selection, then %.1f ms carrying earlier keyframes' fills, %.1f%% of "
+            "hole pixels filled (%.1f%% with the carried fills); OpenCV StereoSGBM "
             "alone: %s ms on %d sideways pairs\n",
             f["pairs"].get<int>(), f["median_ms"].get<double>(), f["max_ms"].get<double>(),
-            f["pair_selection_median_ms"].get<double>(), 100.0 * f["fill_rate"].get<double>(),
+            f["pair_selection_median_ms"].get<double>(), f["carry_median_ms"].get<double>(),
+            100.0 * f["fill_rate"].get<double>(), 100.0 * f["fill_rate_with_carry"].get<double>(),
             f["opencv_sgbm_median_ms"].is_null()
                 ? "-"
                 : std::to_string(f["opencv_sgbm_median_ms"].get<double>()).substr(0, 6).c_str(),

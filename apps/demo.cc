@@ -286,7 +286,8 @@ void RunDemo(const DemoOptions& options) {
        << clear_glass_at_glass_depth << " of " << fill_filled[clear_glass] << ".</p>";
   if (!overlay_ts.empty())
     html << "<p>Keyframe " << overlay_ts
-         << ": filled pixels green (brighter = more confident), "
+         << ": filled pixels green (cyan: carried from earlier keyframes; brighter = more "
+            "confident), "
             "holes left empty magenta.</p><img src=\"fill_overlay.png\">";
   html << "<p>Loop closure, surfel fusion and the with/without-fill comparison are not built yet; "
           "the report grows with the pipeline.</p>";

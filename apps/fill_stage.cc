@@ -11,6 +11,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/image_io.h"
 #include "acquisition/stats.h"
+#include "sfm/fill_carry.h"
 
 namespace fs = std::filesystem;
 
@@ -27,9 +28,10 @@ cv::Mat ToMillimetres(const cv::Mat& depth_m) {
   return mm;
 }
 
-// Filled pixels green (blend weight grows with confidence), holes still empty magenta.
+// Filled pixels green, or cyan where carried from earlier keyframes (blend weight grows with
+// confidence), holes still empty magenta.
 cv::Mat Overlay(const cv::Mat& color, const cv::Mat& filled_depth, const cv::Mat& fill_mask,
-                const cv::Mat& confidence) {
+                const cv::Mat& confidence, const cv::Mat& source) {
   cv::Mat out = color.clone();
   for (int y = 0; y < out.rows; ++y)
     for (int x = 0; x < out.cols; ++x) {
@@ -37,7 +39,9 @@ cv::Mat Overlay(const cv::Mat& color, const cv::Mat& filled_depth, const cv::Mat
       cv::Vec3d tint;
       double w;
       if (fill_mask.at<uint8_t>(y, x)) {
-        tint = {0, 255, 0};
+        tint = source.at<uint8_t>(y, x) == static_cast<uint8_t>(DepthSource::kCarried)
+                   ? cv::Vec3d(255, 255, 0)
+                   : cv::Vec3d(0, 255, 0);
         w = 0.35 + 0.4 * confidence.at<float>(y, x);
       } else if (!(filled_depth.at<float>(y, x) > 0)) {
         tint = {255, 0, 255};
@@ -61,7 +65,7 @@ bool FillStageOptions::Check(std::string* message) const {
     if (message) *message = "pairs.max_near_disparity_px exceeds the stereo search range";
     return false;
   }
-  return pairs.Check(message) && stereo.Check(message);
+  return pairs.Check(message) && stereo.Check(message) && carry.Check(message);
 }
 
 FillStage::FillStage(const Camera& camera, const FillStageOptions& options,
@@ -120,8 +124,7 @@ void FillStage::Process(const StereoJob& job) {
   KeyframeFill k;
   k.timestamp = key1.timestamp_text;
   k.hole_pixels = cv::countNonZero(key1.hole_mask);
-  cv::Mat filled_depth = key1.depth, fill_mask = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
-  cv::Mat confidence = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
+  StereoFillResult r;
   if (job.key2) {
     const SE3 key1_from_key2 = job.choice.partner_pose.key1_from_key2;
     ThirdView third;
@@ -131,8 +134,7 @@ void FillStage::Process(const StereoJob& job) {
     }
     spdlog::debug("fill {}: {}; {}", k.timestamp, job.choice.BriefReport(),
                   job.choice.partner_pose.BriefReport());
-    const StereoFillResult r =
-        FillHolesByStereo(key1, job.key2->frame, camera_, key1_from_key2, options_.stereo, third);
+    r = FillHolesByStereo(key1, job.key2->frame, camera_, key1_from_key2, options_.stereo, third);
     k.partner = job.key2->frame.timestamp_text;
     if (job.third) k.third = job.third->frame.timestamp_text;
     k.method = r.method;
@@ -141,17 +143,29 @@ void FillStage::Process(const StereoJob& job) {
     k.third_view = r.third_view_used;
     k.termination = r.termination;
     k.stereo_error_median_m = r.stereo_error_median_m;
-    if (r.success) {
-      filled_depth = r.filled_depth;
-      fill_mask = r.fill_mask;
-      confidence = r.confidence;
-      k.filled_pixels = r.filled_pixels;
-    }
     spdlog::debug("fill {}: {}", k.timestamp, r.BriefReport());
   } else {
     k.termination = job.choice.reason;
     spdlog::debug("fill {}: {}", k.timestamp, job.choice.BriefReport());
   }
+  // The earlier keyframes' own fills, moved into this keyframe; then this keyframe's own fills
+  // join them (never the carried ones, so an error cannot feed on itself).
+  const SE3& world_from_key1 = job.key1->world_from_camera;
+  std::vector<const KeyframeFillPoints*> earlier;
+  for (const KeyframeFillPoints& e : earlier_fills_) earlier.push_back(&e);
+  const CarriedFillResult c =
+      CarryFills(key1, world_from_key1, &r, earlier, camera_, options_.carry);
+  k.filled_pixels = c.filled_pixels;
+  k.carried_pixels = c.carried_pixels;
+  k.corrected_pixels = c.corrected_pixels;
+  if (c.carried_pixels + c.corrected_pixels > 0)
+    spdlog::debug("fill {}: {}", k.timestamp, c.BriefReport());
+  if (options_.carry.max_keyframes > 0) {
+    earlier_fills_.push_back(FillPointsInWorld(r, world_from_key1, camera_));
+    while (static_cast<int>(earlier_fills_.size()) > options_.carry.max_keyframes)
+      earlier_fills_.pop_front();
+  }
+  const cv::Mat& filled_depth = c.filled_depth;
   k.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const fs::path base = fs::path(keyframe_dir_) / k.timestamp;
@@ -159,20 +173,22 @@ void FillStage::Process(const StereoJob& job) {
   WriteImage(base.string() + ".depth_filled.png", ToMillimetres(filled_depth));
   if (!key1.color.empty()) {
     WriteImage(base.string() + ".fill_overlay.png",
-               Overlay(key1.color, filled_depth, fill_mask, confidence));
+               Overlay(key1.color, filled_depth, c.fill_mask, c.confidence, c.source));
     WriteImage(base.string() + ".color.png", key1.color);  // for colmap-export
   }
   done_.push_back(k);
 }
 
 nlohmann::ordered_json FillStage::Report() const {
-  long holes = 0, filled = 0;
+  long holes = 0, filled = 0, carried = 0, corrected = 0;
   int paired = 0;
   std::vector<double> errors, ms;
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
   for (const KeyframeFill& k : done_) {
     holes += k.hole_pixels;
     filled += k.filled_pixels;
+    carried += k.carried_pixels;
+    corrected += k.corrected_pixels;
     if (!k.partner.empty()) {
       ++paired;
       ms.push_back(k.ms);
@@ -189,6 +205,8 @@ nlohmann::ordered_json FillStage::Report() const {
          {"method", k.method},
          {"hole_pixels", k.hole_pixels},
          {"filled_pixels", k.filled_pixels},
+         {"carried_pixels", k.carried_pixels},
+         {"corrected_pixels", k.corrected_pixels},
          {"fill_rate", k.hole_pixels ? double(k.filled_pixels) / k.hole_pixels : 0.0},
          {"stereo_error_median_m", k.stereo_error_median_m},
          {"ms", k.ms},
@@ -199,6 +217,8 @@ nlohmann::ordered_json FillStage::Report() const {
       {"hole_pixels", holes},
       {"filled_pixels", filled},
       {"fill_rate", holes ? double(filled) / holes : 0.0},
+      {"carried_pixels", carried},
+      {"corrected_pixels", corrected},
       {"stereo_error_median_m",
        errors.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(Median(errors))},
       {"keyframes_filled", static_cast<int>(done_.size())},

@@ -5,11 +5,12 @@
 // never waits on stereo; for recorded input Offer() waits for room (options.drop_when_busy). One
 // worker thread pairs keyframes (KeyframePairScheduler), fills each keyframe's holes
 // (FillHolesByStereo, with the third view when the pair selection found one) and writes, for every
-// keyframe, in <out_dir>/keyframes/ (names in DESIGN.md):
+// keyframe, after carrying the validated fills of the last few keyframes into its holes
+// (CarryFills, sfm/fill_carry.h), in <out_dir>/keyframes/ (names in DESIGN.md):
 //   <ts>.hole_mask.png     8-bit HoleCode (0 valid, 1 no return, 2 out of range, 3 shadow)
 //   <ts>.depth_filled.png  16-bit millimetres: sensor depth plus filled pixels, 0 still empty
-//   <ts>.fill_overlay.png  colour image, filled pixels green (brighter = more confident),
-//                          holes still empty magenta
+//   <ts>.fill_overlay.png  colour image, filled pixels green (cyan: carried from earlier
+//                          keyframes; brighter = more confident), holes still empty magenta
 //   <ts>.color.png         the keyframe's colour image (lossless; colmap-export uses it)
 // Each file is written atomically. Finish() drains the queue and joins the worker; Report() then
 // gives report.json's "fill" object.
@@ -18,6 +19,7 @@
 #pragma once
 
 #include <atomic>
+#include <deque>
 #include <exception>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -28,6 +30,7 @@
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
 #include "apps/bounded_queue.h"
+#include "sfm/fill_carry.h"
 #include "sfm/keyframe_pairs.h"
 #include "sfm/stereo_fill.h"
 
@@ -36,6 +39,7 @@ namespace gf {
 struct FillStageOptions {
   PairSelectionOptions pairs;
   StereoFillOptions stereo;
+  FillCarryOptions carry;
   int queue_capacity = 16;  // keyframes waiting for the worker
   // Live input: a keyframe arriving at a full queue is dropped from the fill (and counted), so
   // tracking never waits. Recorded input (false): Offer() waits for room instead, so that every
@@ -55,7 +59,9 @@ struct KeyframeFill {
   int matches = 0;
   bool third_view = false;
   int hole_pixels = 0;
-  int filled_pixels = 0;
+  int filled_pixels = 0;             // own stereo and carried
+  int carried_pixels = 0;            // holes filled from earlier keyframes' fills
+  int corrected_pixels = 0;          // own fills the earlier keyframes' consensus replaced
   double stereo_error_median_m = 0;  // stereo vs sensor on pixels both have
   double ms = 0;                     // pairing + stereo + validation, milliseconds
 };
@@ -87,7 +93,9 @@ class FillStage {
   FillStageOptions options_;
   std::string keyframe_dir_;
   BoundedQueue<Offered> queue_;
-  std::vector<KeyframeFill> done_;  // written by the worker, read after Finish()
+  std::vector<KeyframeFill> done_;                // written by the worker, read after Finish()
+  std::deque<KeyframeFillPoints> earlier_fills_;  // the last carry.max_keyframes keyframes' own
+                                                  // fills (worker only)
   int dropped_ = 0;
   std::exception_ptr error_;
   std::thread worker_;

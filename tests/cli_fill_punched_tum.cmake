@@ -30,8 +30,9 @@ string(JSON holes GET "${report}" fill hole_pixels)
 string(JSON filled GET "${report}" fill filled_pixels)
 string(JSON fill_rate GET "${report}" fill fill_rate)
 string(JSON stereo_error GET "${report}" fill stereo_error_median_m)
-if(NOT written EQUAL keyframes OR holes LESS 1 OR filled LESS 1)
-  message(FATAL_ERROR "fill report: ${keyframes} keyframes, ${written} written, ${filled} of ${holes}")
+string(JSON carried GET "${report}" fill carried_pixels)
+if(NOT written EQUAL keyframes OR holes LESS 1 OR filled LESS 1 OR carried LESS 1)
+  message(FATAL_ERROR "fill report: ${keyframes} keyframes, ${written} written, ${filled} of ${holes}, ${carried} carried")
 endif()
 # Every pair here is forward (the camera moves along its axis): the first keyframe's entry names
 # the plane sweep, and a third view other than its partner.
@@ -71,8 +72,9 @@ execute_process(COMMAND "${PYTHON}" "${tools}/fill-eval.py" "${work}/punched" "$
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "fill-eval.py failed (${rc}): ${err} ${score}")
 endif()
-# Bounds below today's figures (fill 0.88, good 0.78, median 1.0%, p90 3.3% on these 40 frames);
-# they guard against regressions and hold the goal: good_rate >= 0.70 with p90 <= 5%.
-check_fill_score("${score}" "fill on punched TUM frames" 0.80 0.70 0.015 0.05)
+# Bounds below today's figures (fill 0.96, good 0.85, median 1.1%, p90 3.1% on these 40 frames;
+# 0.88 and 0.78 without the fills carried from earlier keyframes); they guard against regressions
+# and hold the goal: good_rate >= 0.70 with p90 <= 5%.
+check_fill_score("${score}" "fill on punched TUM frames" 0.90 0.80 0.015 0.05)
 file(REMOVE_RECURSE "${work}")
 message("fill ok: ${score}")

@@ -1,0 +1,147 @@
+#include "sfm/fill_carry.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "acquisition/errors.h"
+
+namespace gf {
+
+bool FillCarryOptions::Check(std::string* message) const {
+  if (max_keyframes < 0 || min_agreeing < 1 || !(agreement > 0 && agreement < 1)) {
+    if (message)
+      *message = "fill carry: max_keyframes >= 0, min_agreeing >= 1, agreement in (0, 1)";
+    return false;
+  }
+  return true;
+}
+
+KeyframeFillPoints FillPointsInWorld(const StereoFillResult& fill, const SE3& world_from_camera,
+                                     const Camera& camera) {
+  KeyframeFillPoints points;
+  points.world_from_camera = world_from_camera;
+  if (!fill.success || fill.fill_mask.empty()) return points;
+  for (int y = 0; y < fill.fill_mask.rows; ++y)
+    for (int x = 0; x < fill.fill_mask.cols; ++x) {
+      if (!fill.fill_mask.at<uint8_t>(y, x)) continue;
+      const auto source = static_cast<DepthSource>(fill.source.at<uint8_t>(y, x));
+      if (source != DepthSource::kStereo && source != DepthSource::kColmap) continue;
+      const double z = fill.filled_depth.at<float>(y, x);
+      const Eigen::Vector2d n = camera.UndistortPixel({x, y});
+      points.world_points.push_back(
+          (world_from_camera * Eigen::Vector3d(n.x() * z, n.y() * z, z)).cast<float>());
+    }
+  return points;
+}
+
+std::string CarriedFillResult::BriefReport() const {
+  std::ostringstream s;
+  s << filled_pixels << " filled, " << carried_pixels << " carried from earlier keyframes, "
+    << corrected_pixels << " own fills corrected";
+  return s.str();
+}
+
+CarriedFillResult CarryFills(const RgbdFrame& key1, const SE3& world_from_key1,
+                             const StereoFillResult* own,
+                             const std::vector<const KeyframeFillPoints*>& earlier,
+                             const Camera& camera, const FillCarryOptions& options) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+  GF_CHECK(key1.depth.type() == CV_32FC1 && key1.hole_mask.type() == CV_8UC1 &&
+               key1.depth.size() == key1.hole_mask.size(),
+           "need metric depth and a hole mask of the same size");
+  CarriedFillResult r;
+  if (own != nullptr && own->success) {
+    r.filled_depth = own->filled_depth.clone();
+    r.fill_mask = own->fill_mask.clone();
+    r.source = own->source.clone();
+    r.confidence = own->confidence.clone();
+  } else {
+    r.filled_depth = key1.depth.clone();
+    r.fill_mask = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
+    r.source = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
+    r.source.setTo(static_cast<uint8_t>(DepthSource::kSensor), key1.hole_mask == 0);
+    r.confidence = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
+    r.confidence.setTo(1.f, key1.hole_mask == 0);
+  }
+  r.filled_pixels = cv::countNonZero(r.fill_mask);
+
+  std::vector<const KeyframeFillPoints*> views;
+  for (const KeyframeFillPoints* v : earlier)
+    if (v != nullptr && !v->world_points.empty()) views.push_back(v);
+  if (options.max_keyframes == 0 || views.empty()) return r;
+  if (static_cast<int>(views.size()) > options.max_keyframes)
+    views.erase(views.begin(), views.end() - options.max_keyframes);
+
+  // One slot per hole pixel; each earlier keyframe leaves its nearest point's depth there.
+  cv::Mat slot(key1.depth.size(), CV_32SC1, cv::Scalar(-1));
+  std::vector<cv::Point> hole_pixels;
+  for (int y = 0; y < slot.rows; ++y)
+    for (int x = 0; x < slot.cols; ++x)
+      if (key1.hole_mask.at<uint8_t>(y, x)) {
+        slot.at<int>(y, x) = static_cast<int>(hole_pixels.size());
+        hole_pixels.emplace_back(x, y);
+      }
+  const size_t n = views.size();
+  std::vector<float> candidates(hole_pixels.size() * n, 0.f);
+  const SE3 key1_from_world = world_from_key1.Inverse();
+  const Eigen::Matrix3f rotation = key1_from_world.RotationMatrix().cast<float>();
+  const Eigen::Vector3f translation = key1_from_world.translation().cast<float>();
+  // Camera::ProjectDistorted in float, inlined: this loop projects every earlier fill point.
+  const float k1 = static_cast<float>(camera.distortion[0]),
+              k2 = static_cast<float>(camera.distortion[1]),
+              p1 = static_cast<float>(camera.distortion[2]),
+              p2 = static_cast<float>(camera.distortion[3]),
+              k3 = static_cast<float>(camera.distortion[4]);
+  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy),
+              cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
+  for (size_t k = 0; k < n; ++k) {
+    for (const Eigen::Vector3f& world : views[k]->world_points) {
+      const Eigen::Vector3f p = rotation * world + translation;
+      if (!(p.z() > 0)) continue;
+      const float x = p.x() / p.z(), y = p.y() / p.z(), r2 = x * x + y * y;
+      const float radial = 1.f + r2 * (k1 + r2 * (k2 + r2 * k3));
+      // + 0.5 in cx, cy: truncating a value >= 0 then rounds to the nearest pixel.
+      const float u = fx * (x * radial + 2.f * p1 * x * y + p2 * (r2 + 2.f * x * x)) + cx;
+      const float v = fy * (y * radial + p1 * (r2 + 2.f * y * y) + 2.f * p2 * x * y) + cy;
+      if (!(u >= 0 && v >= 0 && u < slot.cols && v < slot.rows)) continue;
+      const int s = slot.at<int>(static_cast<int>(v), static_cast<int>(u));
+      if (s < 0) continue;
+      float& c = candidates[s * n + k];
+      if (c == 0.f || p.z() < c) c = p.z();
+    }
+  }
+
+  std::vector<float> values;
+  for (size_t s = 0; s < hole_pixels.size(); ++s) {
+    int count = 0;
+    for (size_t k = 0; k < n; ++k) count += candidates[s * n + k] > 0;
+    if (count < options.min_agreeing) continue;
+    values.clear();
+    for (size_t k = 0; k < n; ++k)
+      if (candidates[s * n + k] > 0) values.push_back(candidates[s * n + k]);
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    const float median = values[values.size() / 2];
+    const float tolerance = static_cast<float>(options.agreement) * median;
+    int agreeing = 0;
+    for (float v : values) agreeing += std::abs(v - median) <= tolerance;
+    if (agreeing < options.min_agreeing) continue;
+    const cv::Point q = hole_pixels[s];
+    float& depth = r.filled_depth.at<float>(q);
+    if (r.fill_mask.at<uint8_t>(q)) {
+      if (!options.correct_own_fills || std::abs(depth - median) <= tolerance) continue;
+      ++r.corrected_pixels;
+    } else {
+      ++r.carried_pixels;
+      ++r.filled_pixels;
+    }
+    depth = median;
+    r.fill_mask.at<uint8_t>(q) = 255;
+    r.source.at<uint8_t>(q) = static_cast<uint8_t>(DepthSource::kCarried);
+    r.confidence.at<float>(q) = static_cast<float>(agreeing) / static_cast<float>(values.size());
+  }
+  return r;
+}
+
+}  // namespace gf
