@@ -103,6 +103,19 @@ Camera Camera::Scaled(double factor) const {
   return c;
 }
 
+UndistortedPixels::UndistortedPixels(const Camera& camera)
+    : camera_(camera), distorted_(camera.HasDistortion()) {
+  if (!distorted_) return;
+  nodes_x_ = (camera.width - 1 + kStep - 1) / kStep + 1;
+  nodes_y_ = (camera.height - 1 + kStep - 1) / kStep + 1;
+  nodes_.resize(static_cast<size_t>(nodes_x_) * nodes_y_);
+  for (int j = 0; j < nodes_y_; ++j)
+    for (int i = 0; i < nodes_x_; ++i) {
+      const Eigen::Vector2d n = camera.UndistortPixel({i * kStep, j * kStep});
+      nodes_[j * nodes_x_ + i] = {camera.fx * n.x() + camera.cx, camera.fy * n.y() + camera.cy};
+    }
+}
+
 namespace {
 
 double Number(const nlohmann::json& j, const std::string& where, const char* key,

@@ -26,10 +26,12 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "acquisition/se3.h"
 
@@ -79,6 +81,37 @@ struct Camera {
   void UndistortionMaps(cv::Mat* map1, cv::Mat* map2) const;
   // The same camera for an image scaled by `factor` (e.g. 0.5 for a pyramid level).
   Camera Scaled(double factor) const;
+};
+
+// Where each (distorted) pixel of a camera lies in the undistorted pinhole image: exact
+// (Camera::UndistortPixel) on a grid of every 8th pixel, bilinear in between. The distortion field
+// is smooth, so the interpolation is far below a pixel off, at a 64th of the cost of undistorting
+// every pixel. Without distortion, At() is the pixel itself. Immutable after construction.
+class UndistortedPixels {
+ public:
+  explicit UndistortedPixels(const Camera& camera);
+  // Undistorted pinhole pixel of pixel (x, y), which must lie in the image.
+  Eigen::Vector2d At(int x, int y) const {
+    if (!distorted_) return Eigen::Vector2d(x, y);
+    const int i = std::min(x / kStep, nodes_x_ - 2), j = std::min(y / kStep, nodes_y_ - 2);
+    const double a = (x - i * kStep) / static_cast<double>(kStep),
+                 b = (y - j * kStep) / static_cast<double>(kStep);
+    const Eigen::Vector2d* n = &nodes_[j * nodes_x_ + i];
+    return (1 - b) * ((1 - a) * n[0] + a * n[1]) +
+           b * ((1 - a) * n[nodes_x_] + a * n[nodes_x_ + 1]);
+  }
+  // Normalised coordinates (x/z, y/z) of the ray through pixel (x, y), as Camera::UndistortPixel.
+  Eigen::Vector2d Ray(int x, int y) const {
+    const Eigen::Vector2d u = At(x, y);
+    return {(u.x() - camera_.cx) / camera_.fx, (u.y() - camera_.cy) / camera_.fy};
+  }
+
+ private:
+  static constexpr int kStep = 8;
+  Camera camera_;
+  bool distorted_;
+  int nodes_x_ = 0, nodes_y_ = 0;
+  std::vector<Eigen::Vector2d> nodes_;
 };
 
 // Everything camera.json holds.

@@ -115,10 +115,10 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
     const auto t0 = Clock::now();
     const CarriedFillResult c =
         CarryFills(key1.frame, key1.world_from_camera, own, earlier, camera, carry_options);
-    carry_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     filled_with_carry += c.filled_pixels;
     earlier_fills.push_back(own ? FillPointsInWorld(*own, key1.world_from_camera, camera)
                                 : KeyframeFillPoints{});
+    carry_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     while (static_cast<int>(earlier_fills.size()) > carry_options.max_keyframes)
       earlier_fills.pop_front();
   };

@@ -22,13 +22,14 @@ KeyframeFillPoints FillPointsInWorld(const StereoFillResult& fill, const SE3& wo
   KeyframeFillPoints points;
   points.world_from_camera = world_from_camera;
   if (!fill.success || fill.fill_mask.empty()) return points;
+  const UndistortedPixels rays(camera);
   for (int y = 0; y < fill.fill_mask.rows; ++y)
     for (int x = 0; x < fill.fill_mask.cols; ++x) {
       if (!fill.fill_mask.at<uint8_t>(y, x)) continue;
       const auto source = static_cast<DepthSource>(fill.source.at<uint8_t>(y, x));
       if (source != DepthSource::kStereo && source != DepthSource::kColmap) continue;
       const double z = fill.filled_depth.at<float>(y, x);
-      const Eigen::Vector2d n = camera.UndistortPixel({x, y});
+      const Eigen::Vector2d n = rays.Ray(x, y);
       points.world_points.push_back(
           (world_from_camera * Eigen::Vector3d(n.x() * z, n.y() * z, z)).cast<float>());
     }

@@ -315,42 +315,6 @@ GF_VECTOR_CLONES void AggregatePath(const std::vector<uint8_t>& cost, int rows, 
   }
 }
 
-// Where each (distorted) pixel of the camera lies in the undistorted pinhole image: exact
-// (Camera::UndistortPixel) on a grid of every kStep-th pixel, bilinear in between. The distortion
-// field is smooth, so the interpolation is far below a pixel off, at a 64th of the cost.
-class UndistortedPixels {
- public:
-  explicit UndistortedPixels(const Camera& camera)
-      : camera_(camera), distorted_(camera.HasDistortion()) {
-    if (!distorted_) return;
-    nodes_x_ = (camera.width - 1 + kStep - 1) / kStep + 1;
-    nodes_y_ = (camera.height - 1 + kStep - 1) / kStep + 1;
-    nodes_.resize(static_cast<size_t>(nodes_x_) * nodes_y_);
-    for (int j = 0; j < nodes_y_; ++j)
-      for (int i = 0; i < nodes_x_; ++i) nodes_[j * nodes_x_ + i] = Exact(i * kStep, j * kStep);
-  }
-  Eigen::Vector2d At(int x, int y) const {
-    if (!distorted_) return Eigen::Vector2d(x, y);
-    const int i = std::min(x / kStep, nodes_x_ - 2), j = std::min(y / kStep, nodes_y_ - 2);
-    const double a = (x - i * kStep) / static_cast<double>(kStep),
-                 b = (y - j * kStep) / static_cast<double>(kStep);
-    const Eigen::Vector2d* n = &nodes_[j * nodes_x_ + i];
-    return (1 - b) * ((1 - a) * n[0] + a * n[1]) +
-           b * ((1 - a) * n[nodes_x_] + a * n[nodes_x_ + 1]);
-  }
-
- private:
-  static constexpr int kStep = 8;
-  Eigen::Vector2d Exact(int x, int y) const {
-    const Eigen::Vector2d n = camera_.UndistortPixel({x, y});
-    return {camera_.fx * n.x() + camera_.cx, camera_.fy * n.y() + camera_.cy};
-  }
-  const Camera& camera_;
-  bool distorted_;
-  int nodes_x_ = 0, nodes_y_ = 0;
-  std::vector<Eigen::Vector2d> nodes_;
-};
-
 }  // namespace
 
 bool PlaneSweepOptions::Check(std::string* message) const {

@@ -33,8 +33,10 @@
 namespace gf {
 
 struct PlaneSweepOptions {
-  int window_px = 7;               // correlation window side, pixels (odd)
-  int max_planes = 96;             // most planes swept
+  int window_px = 7;  // correlation window side, pixels (odd)
+  // Most planes swept. 96 -> 80 took forward TUM pairs from 147 to 128 ms on one core; punched
+  // TUM good fills 78.0 -> 77.3% (0:150), 85.3 -> 84.3% (0:40); ICL and synthetic unchanged.
+  int max_planes = 80;
   double max_step_px = 1.0;        // the plane spacing moves no pixel by more than this, pixels
   double min_ncc = 0.5;            // textured pixels: mean correlation needed at the chosen plane
   double min_uniqueness = 0.05;    // chosen plane's (aggregated) cost must be this much (relative)

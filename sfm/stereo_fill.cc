@@ -96,7 +96,7 @@ class PhotometricCheck {
  public:
   PhotometricCheck(const RgbdFrame& key1, const ThirdView& third, const Camera& camera,
                    const StereoFillOptions& options)
-      : camera_(camera), options_(options), third_(third) {
+      : camera_(camera), rays_(camera), options_(options), third_(third) {
     if (third.frame == nullptr || third.frame->color.empty()) return;
     cv::cvtColor(key1.color, gray1_, cv::COLOR_BGR2GRAY);
     cv::cvtColor(third.frame->color, gray3_, cv::COLOR_BGR2GRAY);
@@ -110,7 +110,7 @@ class PhotometricCheck {
   double Agreement(int x, int y, double depth) const {
     if (!active()) return 1.0;
     const int r = options_.photometric_patch_px / 2;
-    const Eigen::Vector2d n = camera_.UndistortPixel({x, y});
+    const Eigen::Vector2d n = rays_.Ray(x, y);
     const Eigen::Vector3d p3 =
         key3_from_key1_ * Eigen::Vector3d(n.x() * depth, n.y() * depth, depth);
     if (p3.z() <= 0) return 1.0;
@@ -156,6 +156,7 @@ class PhotometricCheck {
 
  private:
   const Camera& camera_;
+  const UndistortedPixels rays_;
   const StereoFillOptions& options_;
   ThirdView third_;
   cv::Mat gray1_, gray3_, holes1_;
