@@ -12,16 +12,6 @@
 namespace gf {
 namespace {
 
-Camera TumFr1() {
-  Camera c;
-  c.fx = 517.3;
-  c.fy = 516.5;
-  c.cx = 318.6;
-  c.cy = 255.3;
-  c.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
-  return c;
-}
-
 void WriteText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
 
 TEST(Camera, LoadsTheTumCameraJson) {
@@ -39,12 +29,12 @@ TEST(Camera, LoadsTheTumCameraJson) {
 TEST(Camera, JsonRoundTripKeepsEveryField) {
   testing::TempDir dir;
   CameraFile f;
-  f.camera = TumFr1();
+  f.camera = testing::TumFr1Camera();
   f.camera.width = 320;
   f.camera.height = 240;
   f.depth_scale = 1000.0;
   f.depth_registered_to_color = false;
-  Camera ir = TumFr1();
+  Camera ir = testing::TumFr1Camera();
   ir.fx = 580.5;
   f.depth_camera = ir;
   f.color_from_depth =
@@ -98,7 +88,7 @@ TEST(Camera, BadFilesGiveOneLineErrorsNamingFileAndProblem) {
 }
 
 TEST(Camera, BackProjectInvertsProject) {
-  const Camera c = TumFr1();
+  const Camera c = testing::TumFr1Camera();
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(0, 639), v(0, 479), z(0.4, 6.0);
   for (int i = 0; i < 1000; ++i) {
@@ -113,7 +103,7 @@ TEST(Camera, BackProjectInvertsProject) {
 }
 
 TEST(Camera, DistortedProjectionMatchesOpenCv) {
-  const Camera c = TumFr1();
+  const Camera c = testing::TumFr1Camera();
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> xy(-0.5, 0.5), z(0.5, 4.0);
   std::vector<cv::Point3d> points;
@@ -129,7 +119,7 @@ TEST(Camera, DistortedProjectionMatchesOpenCv) {
 }
 
 TEST(Camera, UndistortInvertsDistortOverTheImage) {
-  const Camera c = TumFr1();
+  const Camera c = testing::TumFr1Camera();
   for (double x = -0.55; x <= 0.55; x += 0.05) {
     for (double y = -0.45; y <= 0.45; y += 0.05) {
       const Eigen::Vector2d n(x, y);
@@ -142,7 +132,7 @@ TEST(Camera, UndistortInvertsDistortOverTheImage) {
 }
 
 TEST(Camera, ScaledCameraSeesTheSamePointAtTheScaledPixel) {
-  const Camera c = TumFr1();
+  const Camera c = testing::TumFr1Camera();
   const Camera half = c.Scaled(0.5);
   EXPECT_EQ(half.width, 320);
   EXPECT_EQ(half.height, 240);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "acquisition/depth.h"
+#include "tests/testing.h"
 
 namespace gf {
 namespace {
@@ -14,18 +15,6 @@ namespace {
 // carrying exercises the distorted projection both ways.
 constexpr double kWall = 2.0;
 const cv::Rect kHole(260, 180, 120, 120);
-
-Camera TestCamera() {
-  Camera c;
-  c.width = 640;
-  c.height = 480;
-  c.fx = 517.3;
-  c.fy = 516.5;
-  c.cx = 318.6;
-  c.cy = 255.3;
-  c.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
-  return c;
-}
 
 SE3 CameraAt(double x, double y, double z) {
   return SE3(Eigen::Matrix3d::Identity(), Eigen::Vector3d(x, y, z));
@@ -62,7 +51,7 @@ StereoFillResult OwnFill(const RgbdFrame& frame, double scale) {
 
 KeyframeFillPoints EarlierFill(const SE3& world_from_camera, double scale = 1.0) {
   return FillPointsInWorld(OwnFill(WallFrame(world_from_camera), scale), world_from_camera,
-                           TestCamera());
+                           testing::TumFr1Camera());
 }
 
 std::vector<const KeyframeFillPoints*> Pointers(const std::vector<KeyframeFillPoints>& v) {
@@ -89,8 +78,8 @@ TEST(FillCarry, EarlierKeyframesThatAgreeFillAnEmptyHole) {
   const std::vector<KeyframeFillPoints> earlier = {EarlierFill(CameraAt(0, 0, 0)),
                                                    EarlierFill(CameraAt(0.05, 0, 0.02)),
                                                    EarlierFill(CameraAt(-0.03, 0.04, 0.08))};
-  const CarriedFillResult r =
-      CarryFills(key1, key1_pose, nullptr, Pointers(earlier), TestCamera(), FillCarryOptions{});
+  const CarriedFillResult r = CarryFills(key1, key1_pose, nullptr, Pointers(earlier),
+                                         testing::TumFr1Camera(), FillCarryOptions{});
   const double truth = kWall - 0.05;
   // Most of the hole is filled (the rest lies outside two of the three panes), all of it right.
   EXPECT_GT(r.carried_pixels, kHole.area() * 0.6) << r.BriefReport();
@@ -117,15 +106,16 @@ TEST(FillCarry, EarlierKeyframesThatAgreeFillAnEmptyHole) {
 TEST(FillCarry, OneKeyframeAloneCarriesNothing) {
   const SE3 key1_pose = CameraAt(0.02, 0, 0.03);
   const std::vector<KeyframeFillPoints> earlier = {EarlierFill(CameraAt(0, 0, 0))};
-  const CarriedFillResult r = CarryFills(WallFrame(key1_pose), key1_pose, nullptr,
-                                         Pointers(earlier), TestCamera(), FillCarryOptions{});
+  const CarriedFillResult r =
+      CarryFills(WallFrame(key1_pose), key1_pose, nullptr, Pointers(earlier),
+                 testing::TumFr1Camera(), FillCarryOptions{});
   EXPECT_EQ(r.filled_pixels, 0);
   FillCarryOptions one;
   one.min_agreeing = 1;
-  EXPECT_GT(
-      CarryFills(WallFrame(key1_pose), key1_pose, nullptr, Pointers(earlier), TestCamera(), one)
-          .carried_pixels,
-      kHole.area() / 2);
+  EXPECT_GT(CarryFills(WallFrame(key1_pose), key1_pose, nullptr, Pointers(earlier),
+                       testing::TumFr1Camera(), one)
+                .carried_pixels,
+            kHole.area() / 2);
 }
 
 TEST(FillCarry, KeyframesThatDisagreeCarryNothing) {
@@ -133,8 +123,9 @@ TEST(FillCarry, KeyframesThatDisagreeCarryNothing) {
   // Two earlier fills 10% apart in depth: neither has a second keyframe within 2%.
   const std::vector<KeyframeFillPoints> earlier = {EarlierFill(CameraAt(0, 0, 0), 1.0),
                                                    EarlierFill(CameraAt(0.03, 0, 0), 1.1)};
-  const CarriedFillResult r = CarryFills(WallFrame(key1_pose), key1_pose, nullptr,
-                                         Pointers(earlier), TestCamera(), FillCarryOptions{});
+  const CarriedFillResult r =
+      CarryFills(WallFrame(key1_pose), key1_pose, nullptr, Pointers(earlier),
+                 testing::TumFr1Camera(), FillCarryOptions{});
   EXPECT_EQ(r.filled_pixels, 0) << r.BriefReport();
 }
 
@@ -146,8 +137,8 @@ TEST(FillCarry, ConsensusReplacesADisagreeingOwnFill) {
                                                    EarlierFill(CameraAt(0.02, 0, 0)),
                                                    EarlierFill(CameraAt(0.01, 0.01, 0.03))};
   const double truth = kWall - 0.02;
-  const CarriedFillResult r =
-      CarryFills(key1, key1_pose, &own, Pointers(earlier), TestCamera(), FillCarryOptions{});
+  const CarriedFillResult r = CarryFills(key1, key1_pose, &own, Pointers(earlier),
+                                         testing::TumFr1Camera(), FillCarryOptions{});
   EXPECT_GT(r.corrected_pixels, kHole.area() * 0.8) << r.BriefReport();
   EXPECT_EQ(r.carried_pixels, 0);  // the own fill covered the whole hole
   EXPECT_EQ(r.filled_pixels, kHole.area());
@@ -156,25 +147,26 @@ TEST(FillCarry, ConsensusReplacesADisagreeingOwnFill) {
   FillCarryOptions keep;
   keep.correct_own_fills = false;
   const CarriedFillResult kept =
-      CarryFills(key1, key1_pose, &own, Pointers(earlier), TestCamera(), keep);
+      CarryFills(key1, key1_pose, &own, Pointers(earlier), testing::TumFr1Camera(), keep);
   EXPECT_EQ(kept.corrected_pixels, 0);
   EXPECT_EQ(WithinOfTruth(kept, truth * 1.06, 0.001), kHole.area());
 
   // An own fill that agrees with the consensus stays as it is.
   const StereoFillResult right = OwnFill(key1, 1.0);
-  EXPECT_EQ(
-      CarryFills(key1, key1_pose, &right, Pointers(earlier), TestCamera(), {}).corrected_pixels, 0);
+  EXPECT_EQ(CarryFills(key1, key1_pose, &right, Pointers(earlier), testing::TumFr1Camera(), {})
+                .corrected_pixels,
+            0);
 }
 
 TEST(FillCarry, OnlyOwnStereoFillsAreCarriedOn) {
   const SE3 pose = CameraAt(0, 0, 0);
   StereoFillResult r = OwnFill(WallFrame(pose), 1.0);
-  EXPECT_EQ(FillPointsInWorld(r, pose, TestCamera()).world_points.size(),
+  EXPECT_EQ(FillPointsInWorld(r, pose, testing::TumFr1Camera()).world_points.size(),
             static_cast<size_t>(kHole.area()));
   r.source(kHole).setTo(static_cast<uint8_t>(DepthSource::kCarried));
-  EXPECT_TRUE(FillPointsInWorld(r, pose, TestCamera()).world_points.empty());
+  EXPECT_TRUE(FillPointsInWorld(r, pose, testing::TumFr1Camera()).world_points.empty());
   r.success = false;
-  EXPECT_TRUE(FillPointsInWorld(r, pose, TestCamera()).world_points.empty());
+  EXPECT_TRUE(FillPointsInWorld(r, pose, testing::TumFr1Camera()).world_points.empty());
 }
 
 TEST(FillCarry, OptionsCheck) {

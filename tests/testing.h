@@ -7,7 +7,21 @@
 #include <filesystem>
 #include <string>
 
+#include "acquisition/camera.h"
+
 namespace gf::testing {
+
+// The colour camera of TUM fr1 (640x480, as the dataset's camera.json lists it), lens distortion
+// included.
+inline Camera TumFr1Camera() {
+  Camera c;
+  c.fx = 517.3;
+  c.fy = 516.5;
+  c.cx = 318.6;
+  c.cy = 255.3;
+  c.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
+  return c;
+}
 
 // Path of a folder in ../shared/datasets, or "" when the datasets are not on this machine.
 inline std::string SharedDataset(const std::string& name) {
