@@ -165,7 +165,7 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
   j["pair_selection_median_ms"] = Median(pair_ms);  // features, matching, pose refinement
   j["median_ms"] = Median(fill_ms);                 // FillHolesByStereo
   j["max_ms"] = fill_ms.empty() ? 0.0 : *std::max_element(fill_ms.begin(), fill_ms.end());
-  j["carry_median_ms"] = Median(carry_ms);                             // CarryFills, every keyframe
+  j["carry_median_ms"] = Median(carry_ms);  // CarryFills + FillPointsInWorld, every keyframe
   j["fill_rate"] = holes ? static_cast<double>(filled) / holes : 0.0;  // own stereo
   j["fill_rate_with_carry"] = holes ? static_cast<double>(filled_with_carry) / holes : 0.0;
   j["methods"] = methods;

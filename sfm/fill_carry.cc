@@ -20,7 +20,6 @@ bool FillCarryOptions::Check(std::string* message) const {
 KeyframeFillPoints FillPointsInWorld(const StereoFillResult& fill, const SE3& world_from_camera,
                                      const Camera& camera) {
   KeyframeFillPoints points;
-  points.world_from_camera = world_from_camera;
   if (!fill.success || fill.fill_mask.empty()) return points;
   const UndistortedPixels rays(camera);
   for (int y = 0; y < fill.fill_mask.rows; ++y)

@@ -46,11 +46,10 @@ struct FillCarryOptions {
   bool Check(std::string* message = nullptr) const;
 };
 
-// The pixels one keyframe's stereo filled, as points in the world frame (metres), with the
-// keyframe's pose. Empty when the stereo filled nothing.
+// The pixels one keyframe's stereo filled, as points in the world frame (metres). Empty when the
+// stereo filled nothing.
 struct KeyframeFillPoints {
   std::vector<Eigen::Vector3f> world_points;
-  SE3 world_from_camera;
 };
 
 // The own stereo fills of `fill` (pixels with fill_mask set and source kStereo or kColmap) moved
