@@ -5,7 +5,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <deque>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -106,21 +105,12 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
   long long holes = 0, filled = 0, filled_with_carry = 0;
   int unpaired = 0;
   std::map<std::string, int> methods;
-  const FillCarryOptions carry_options;
-  std::deque<KeyframeFillPoints> earlier_fills;
+  FillCarrier carrier(camera, FillCarryOptions{});
   // Carries the earlier keyframes' fills into this one (as the fill stage of reconstruct does).
   auto carry = [&](const StereoKeyframe& key1, const StereoFillResult* own) {
-    std::vector<const KeyframeFillPoints*> earlier;
-    for (const KeyframeFillPoints& e : earlier_fills) earlier.push_back(&e);
     const auto t0 = Clock::now();
-    const CarriedFillResult c =
-        CarryFills(key1.frame, key1.world_from_camera, own, earlier, camera, carry_options);
-    filled_with_carry += c.filled_pixels;
-    earlier_fills.push_back(own ? FillPointsInWorld(*own, key1.world_from_camera, camera)
-                                : KeyframeFillPoints{});
+    filled_with_carry += carrier.Next(key1.frame, key1.world_from_camera, own).filled_pixels;
     carry_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-    while (static_cast<int>(earlier_fills.size()) > carry_options.max_keyframes)
-      earlier_fills.pop_front();
   };
   auto process = [&](const StereoJob& job) {
     if (!job.key2) {

@@ -73,7 +73,8 @@ FillStage::FillStage(const Camera& camera, const FillStageOptions& options,
     : camera_(camera),
       options_(options),
       keyframe_dir_((fs::path(out_dir) / "keyframes").string()),
-      queue_(options.queue_capacity) {
+      queue_(options.queue_capacity),
+      carrier_(camera, options.carry) {
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
   std::error_code ec;
@@ -148,32 +149,21 @@ void FillStage::Process(const StereoJob& job) {
     k.termination = job.choice.reason;
     spdlog::debug("fill {}: {}", k.timestamp, job.choice.BriefReport());
   }
-  // The earlier keyframes' own fills, moved into this keyframe; then this keyframe's own fills
-  // join them (never the carried ones, so an error cannot feed on itself).
-  const SE3& world_from_key1 = job.key1->world_from_camera;
-  std::vector<const KeyframeFillPoints*> earlier;
-  for (const KeyframeFillPoints& e : earlier_fills_) earlier.push_back(&e);
-  const CarriedFillResult c =
-      CarryFills(key1, world_from_key1, &r, earlier, camera_, options_.carry);
+  // The earlier keyframes' own fills, moved into this keyframe.
+  const CarriedFillResult c = carrier_.Next(key1, job.key1->world_from_camera, &r);
   k.filled_pixels = c.filled_pixels;
   k.carried_pixels = c.carried_pixels;
   k.corrected_pixels = c.corrected_pixels;
   if (c.carried_pixels + c.corrected_pixels > 0)
     spdlog::debug("fill {}: {}", k.timestamp, c.BriefReport());
-  if (options_.carry.max_keyframes > 0) {
-    earlier_fills_.push_back(FillPointsInWorld(r, world_from_key1, camera_));
-    while (static_cast<int>(earlier_fills_.size()) > options_.carry.max_keyframes)
-      earlier_fills_.pop_front();
-  }
-  const cv::Mat& filled_depth = c.filled_depth;
   k.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const fs::path base = fs::path(keyframe_dir_) / k.timestamp;
   WriteImage(base.string() + ".hole_mask.png", key1.hole_mask);
-  WriteImage(base.string() + ".depth_filled.png", ToMillimetres(filled_depth));
+  WriteImage(base.string() + ".depth_filled.png", ToMillimetres(c.filled_depth));
   if (!key1.color.empty()) {
     WriteImage(base.string() + ".fill_overlay.png",
-               Overlay(key1.color, filled_depth, c.fill_mask, c.confidence, c.source));
+               Overlay(key1.color, c.filled_depth, c.fill_mask, c.confidence, c.source));
     WriteImage(base.string() + ".color.png", key1.color);  // for colmap-export
   }
   done_.push_back(k);

@@ -19,7 +19,6 @@
 #pragma once
 
 #include <atomic>
-#include <deque>
 #include <exception>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -93,9 +92,8 @@ class FillStage {
   FillStageOptions options_;
   std::string keyframe_dir_;
   BoundedQueue<Offered> queue_;
-  std::vector<KeyframeFill> done_;                // written by the worker, read after Finish()
-  std::deque<KeyframeFillPoints> earlier_fills_;  // the last carry.max_keyframes keyframes' own
-                                                  // fills (worker only)
+  std::vector<KeyframeFill> done_;  // written by the worker, read after Finish()
+  FillCarrier carrier_;             // the last keyframes' own fills (worker only)
   int dropped_ = 0;
   std::exception_ptr error_;
   std::thread worker_;

@@ -144,4 +144,24 @@ CarriedFillResult CarryFills(const RgbdFrame& key1, const SE3& world_from_key1,
   return r;
 }
 
+FillCarrier::FillCarrier(const Camera& camera, const FillCarryOptions& options)
+    : camera_(camera), options_(options) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+}
+
+CarriedFillResult FillCarrier::Next(const RgbdFrame& key1, const SE3& world_from_key1,
+                                    const StereoFillResult* own) {
+  std::vector<const KeyframeFillPoints*> earlier;
+  for (const KeyframeFillPoints& e : earlier_) earlier.push_back(&e);
+  CarriedFillResult c = CarryFills(key1, world_from_key1, own, earlier, camera_, options_);
+  if (options_.max_keyframes > 0) {
+    // Own fills only, never the carried ones, so that an error cannot feed on itself.
+    earlier_.push_back(own ? FillPointsInWorld(*own, world_from_key1, camera_)
+                           : KeyframeFillPoints{});
+    while (static_cast<int>(earlier_.size()) > options_.max_keyframes) earlier_.pop_front();
+  }
+  return c;
+}
+
 }  // namespace gf

@@ -17,14 +17,15 @@
 // per keyframe on one core. It also spreads an error that several keyframes share: clear glass
 // filled at the glass's own depth on the demo scene went from 138 to 198 pixels (of about 15000).
 //
-// No threads, no I/O; the functions keep no state (safe to call from any thread). Usage:
-//   std::deque<gf::KeyframeFillPoints> earlier;           // the caller keeps the last few
-//   gf::CarriedFillResult c = gf::CarryFills(key1, world_from_key1, &stereo_result,
-//                                           pointers_to(earlier), camera, {});
-//   earlier.push_back(gf::FillPointsInWorld(stereo_result, world_from_key1, camera));
+// No threads, no I/O. The free functions keep no state; a FillCarrier keeps the last keyframes'
+// fill points and is used from one thread. Usage:
+//   gf::FillCarrier carrier(camera, {});
+//   for each keyframe, in order:
+//     gf::CarriedFillResult c = carrier.Next(key1, world_from_key1, &stereo_result);  // or nullptr
 #pragma once
 
 #include <Eigen/Core>
+#include <deque>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -74,5 +75,21 @@ CarriedFillResult CarryFills(const RgbdFrame& key1, const SE3& world_from_key1,
                              const StereoFillResult* own,
                              const std::vector<const KeyframeFillPoints*>& earlier,
                              const Camera& camera, const FillCarryOptions& options);
+
+// CarryFills over a stream of keyframes: keeps the own fill points of the last
+// options.max_keyframes keyframes (none when it is 0).
+class FillCarrier {
+ public:
+  FillCarrier(const Camera& camera, const FillCarryOptions& options);
+  // Carries the kept keyframes' fills into key1, then keeps key1's own fills (own: its stereo
+  // result, or null when it had none).
+  CarriedFillResult Next(const RgbdFrame& key1, const SE3& world_from_key1,
+                         const StereoFillResult* own);
+
+ private:
+  Camera camera_;
+  FillCarryOptions options_;
+  std::deque<KeyframeFillPoints> earlier_;
+};
 
 }  // namespace gf
