@@ -1,10 +1,10 @@
 # `glassfusion demo` end to end on the built-in glass scene (no datasets needed): the report is
 # written, the stereo fill reaches the glossy, dark and glass holes, and few filled clear-glass
 # pixels take the glass's own depth instead of the background seen through it (the goal is none;
-# measured 138 of 12953, 1.1%, with seed 1; 342 of 14509 when the sweep also retries SGBM's
-# rejected pixels, 522 of 16423 with whole 7 px patches in the third-view check, 1187 of 17013
-# before hole windows). Measured fill (good): glossy 76% (76%), dark 86% (83%), textured glass
-# 76% (76%), clear glass 67% (65%).
+# measured 198 of 15055, 1.3%, with seed 1; 138 of 12953 before fills were carried from earlier
+# keyframes, 342 of 14509 when the sweep also retries SGBM's rejected pixels, 522 of 16423 with
+# whole 7 px patches in the third-view check, 1187 of 17013 before hole windows). Measured fill
+# (good): glossy 91% (91%), dark 90% (87%), textured glass 87% (87%), clear glass 78% (74%).
 set(work "${CMAKE_CURRENT_BINARY_DIR}/cli_demo_glass_tmp")
 file(REMOVE_RECURSE "${work}")
 execute_process(COMMAND "${GLASSFUSION}" demo --out "${work}" --data "${work}/no-datasets"
