@@ -19,6 +19,7 @@
 #include "acquisition/file_util.h"
 #include "acquisition/stats.h"
 #include "acquisition/trajectory_metrics.h"
+#include "apps/config.h"
 #include "apps/progress.h"
 #include "registration/tracker.h"
 #include "sfm/fill_carry.h"
@@ -65,11 +66,10 @@ Eigen::Matrix4d ToEigen(const cv::Mat& m) {
 
 // OpenCV's StereoSGBM alone on a rectified pair (the dense-stereo step without our range, checks
 // and validation): the full num_disparities from 0 and the other SGBM and rectification settings
-// of StereoFillOptions' defaults. Returns milliseconds.
+// of `o`, ours. Returns milliseconds.
 double TimeOpenCvSgbm(const RgbdFrame& a, const RgbdFrame& b, const Camera& camera,
-                      const SE3& b_from_a) {
+                      const SE3& b_from_a, const StereoFillOptions& o) {
   const auto t0 = Clock::now();
-  const StereoFillOptions o;
   cv::Mat r, t, r1, r2, p1, p2, q;
   cv::eigen2cv(b_from_a.RotationMatrix(), r);
   cv::eigen2cv(Eigen::Vector3d(b_from_a.translation()), t);
@@ -100,12 +100,12 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
                                        const BenchOptions& options) {
   const int threads = cv::getNumThreads();
   cv::setNumThreads(1);
-  KeyframePairScheduler scheduler(camera, PairSelectionOptions{});
+  KeyframePairScheduler scheduler(camera, options.fill.pairs);
   std::vector<double> pair_ms, fill_ms, carry_ms, sgbm_ms;
   long long holes = 0, filled = 0, filled_with_carry = 0;
   int unpaired = 0;
   std::map<std::string, int> methods;
-  FillCarrier carrier(camera, FillCarryOptions{});
+  FillCarrier carrier(camera, options.fill.carry);
   // Carries the earlier keyframes' fills into this one (as the fill stage of reconstruct does).
   auto carry = [&](const StereoKeyframe& key1, const StereoFillResult* own) {
     const auto t0 = Clock::now();
@@ -124,15 +124,15 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
     if (job.third) third = {&job.third->frame, job.choice.third_pose.key1_from_key2};
     const auto t0 = Clock::now();
     const StereoFillResult r = FillHolesByStereo(job.key1->frame, job.key2->frame, camera,
-                                                 key1_from_key2, StereoFillOptions{}, third);
+                                                 key1_from_key2, options.fill.stereo, third);
     fill_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     holes += r.hole_pixels;
     filled += r.filled_pixels;
     carry(*job.key1, &r);
     ++methods[r.method.empty() ? r.termination : r.method];
-    if (!IsForwardPair(camera, key1_from_key2, StereoFillOptions{}.epipole_margin_px))
-      sgbm_ms.push_back(
-          TimeOpenCvSgbm(job.key1->frame, job.key2->frame, camera, key1_from_key2.Inverse()));
+    if (!IsForwardPair(camera, key1_from_key2, options.fill.stereo.epipole_margin_px))
+      sgbm_ms.push_back(TimeOpenCvSgbm(job.key1->frame, job.key2->frame, camera,
+                                       key1_from_key2.Inverse(), options.fill.stereo));
   };
   const int keyframes =
       (static_cast<int>(frames.size()) + options.fill_every - 1) / options.fill_every;
@@ -176,7 +176,7 @@ bool BenchOptions::Check(std::string* message) const {
     if (message) *message = "need --fill-every >= 0";
     return false;
   }
-  return source.Check(message);
+  return source.Check(message) && tracker.Check(message) && fill.Check(message);
 }
 
 nlohmann::ordered_json RunBench(const BenchOptions& options) {
@@ -209,7 +209,7 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   std::vector<MethodResult> results;
   {
     MethodResult ours{"glassfusion frame-to-keyframe ICP", {}, {}, 0};
-    FrameToKeyframeTracker tracker(camera, TrackerOptions{});
+    FrameToKeyframeTracker tracker(camera, options.tracker);
     TerminalProgress progress("bench: glassfusion", static_cast<int>(frames.size()));
     for (const RgbdFrame& f : frames) {
       const auto t0 = Clock::now();
@@ -276,6 +276,7 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   for (const MethodResult& m : results)
     out["methods"].push_back(Summarise(m, gt.empty() ? nullptr : &gt));
   if (!stereo_fill.is_null()) out["stereo_fill"] = stereo_fill;
+  out["settings"] = SettingsToJson(options.tracker, options.fill);
   return out;
 }
 

@@ -17,6 +17,8 @@
 #include <string>
 
 #include "acquisition/frame_source.h"
+#include "apps/fill_stage.h"
+#include "registration/tracker.h"
 
 namespace gf {
 
@@ -31,6 +33,8 @@ struct BenchOptions {
   // tracked poses; next to OpenCV's StereoSGBM alone on the same rectified sideways pairs.
   int fill_every = 0;
   FrameSourceOptions source;
+  TrackerOptions tracker;  // ours, as reconstruct runs it (--config FILE may change both)
+  FillStageOptions fill;   // pairs, stereo (also the OpenCV SGBM peer's settings) and carry
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -10,6 +10,7 @@
 #include "apps/demo.h"
 #include "apps/info.h"
 #include "apps/progress.h"
+#include "apps/config.h"
 #include "apps/reconstruct.h"
 #include "datasets/synth.h"
 
@@ -89,10 +90,17 @@ void RegisterCommands(CLI::App& app) {
     cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
     auto no_fill = std::make_shared<bool>(false);
     cmd->add_flag("--no-fill", *no_fill, "track only: no stereo hole filling of keyframes");
-    cmd->add_flag("--sweep-all", options->fill_options.stereo.plane_sweep_always,
+    auto sweep_all = std::make_shared<bool>(false);
+    cmd->add_flag("--sweep-all", *sweep_all,
                   "plane-sweep every keyframe pair (default: rectified SGBM for sideways pairs, "
                   "then the sweep over the holes it left; the sweep alone for forward ones)");
-    cmd->callback([options, args, range, no_fill] {
+    cmd->add_option("--config", options->config_file,
+                    "JSON file of tracker and fill settings (the tree report.json lists under "
+                    "config.settings; any part of it)");
+    cmd->callback([options, args, range, no_fill, sweep_all] {
+      if (!options->config_file.empty())
+        ApplyConfigFile(options->config_file, &options->tracker, &options->fill_options);
+      if (*sweep_all) options->fill_options.stereo.plane_sweep_always = true;
       options->fill = !*no_fill;
       options->input = args->input;
       options->source = args->ToOptions();
@@ -118,7 +126,11 @@ void RegisterCommands(CLI::App& app) {
         "--fill-every", options->fill_every,
         "also time stereo hole filling on one core, every K-th frame a keyframe, paired "
         "and filled as reconstruct does with the tracked poses (0: off)");
-    cmd->callback([options, args, range, no_peers] {
+    auto config = std::make_shared<std::string>();
+    cmd->add_option("--config", *config,
+                    "JSON file of tracker and fill settings, as for reconstruct");
+    cmd->callback([options, args, range, no_peers, config] {
+      if (!config->empty()) ApplyConfigFile(*config, &options->tracker, &options->fill);
       options->input = args->input;
       options->source = args->ToOptions();
       options->peers = !*no_peers;

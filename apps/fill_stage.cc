@@ -65,6 +65,12 @@ bool FillStageOptions::Check(std::string* message) const {
     if (message) *message = "pairs.max_near_disparity_px exceeds the stereo search range";
     return false;
   }
+  if (pairs.epipole_margin_px != stereo.epipole_margin_px) {
+    // Pair selection picks a partner by the method that will fill it (its disparity limits
+    // differ for forward pairs); the stereo must classify the pair the same way.
+    if (message) *message = "pairs.epipole_margin_px and stereo.epipole_margin_px must be equal";
+    return false;
+  }
   return pairs.Check(message) && stereo.Check(message) && carry.Check(message);
 }
 

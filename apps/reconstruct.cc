@@ -15,6 +15,7 @@
 #include "acquisition/file_util.h"
 #include "acquisition/trajectory.h"
 #include "apps/bounded_queue.h"
+#include "apps/config.h"
 #include "apps/progress.h"
 
 namespace fs = std::filesystem;
@@ -178,25 +179,14 @@ ReconstructSummary RunReconstruct(const ReconstructOptions& options) {
                      {"kind", source->Kind()},
                      {"first_frame", options.first_frame},
                      {"end_frame", options.end_frame}};
-  const TrackerOptions& t = options.tracker;
-  report["config"] = {{"tracker", "frame_to_keyframe_icp"},
-                      {"pyramid_levels", t.pyramid_levels},
-                      {"icp_iterations", t.icp.iterations},
-                      {"icp_max_distance_m", t.icp.max_distance_m},
-                      {"icp_max_normal_angle_deg", t.icp.max_normal_angle_deg},
-                      {"keyframe_max_rotation_deg", t.keyframes.max_rotation_deg},
-                      {"keyframe_max_translation_m", t.keyframes.max_translation_m},
-                      {"keyframe_min_overlap", t.keyframes.min_overlap},
-                      {"stereo_fill", options.fill},
-                      {"pair_min_matches", options.fill_options.pairs.min_matches},
-                      {"pair_min_baseline_m", options.fill_options.pairs.min_baseline_m},
-                      {"pair_max_baseline_m", options.fill_options.pairs.max_baseline_m},
-                      {"pair_max_rotation_deg", options.fill_options.pairs.max_rotation_deg},
-                      {"sgbm_num_disparities", options.fill_options.stereo.num_disparities},
-                      {"sgbm_block_size", options.fill_options.stereo.block_size},
-                      {"fill_max_ring_error", options.fill_options.stereo.max_ring_error},
-                      {"threads", options.fill ? "reader + tracker + stereo" : "reader + tracker"},
-                      {"hardware_concurrency", std::thread::hardware_concurrency()}};
+  report["config"] = {
+      {"tracker", "frame_to_keyframe_icp"},
+      {"stereo_fill", options.fill},
+      {"threads", options.fill ? "reader + tracker + stereo" : "reader + tracker"},
+      {"hardware_concurrency", std::thread::hardware_concurrency()},
+      {"file", options.config_file.empty() ? nlohmann::ordered_json()
+                                           : nlohmann::ordered_json(options.config_file)},
+      {"settings", SettingsToJson(options.tracker, options.fill_options)}};
   report["frames"] = summary.frames;
   report["fps"] = summary.fps;
   report["stages"] = {{"read", StageStats(read_ms)}, {"track", StageStats(track_ms)}};

@@ -23,6 +23,7 @@ namespace gf {
 struct ReconstructOptions {
   std::string input;
   std::string out_dir;
+  std::string config_file;  // --config FILE, applied (apps/config.h); listed in report.json
   int first_frame = 0;  // --frames A:B: skip frames before A
   int end_frame = -1;   // ... and stop before B (-1 = to the end)
   FrameSourceOptions source;

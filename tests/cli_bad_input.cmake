@@ -34,6 +34,16 @@ file(WRITE "${tmp}/camera.json"
      "{\"width\": 8, \"height\": 6, \"fx\": 10, \"fy\": 10, \"cx\": 3.5, \"cy\": 2.5, \"depth_scale\": 5000}")
 file(WRITE "${tmp}/depth/1.png" "garbage")
 expect_error("^error: .*depth/1.png: cannot decode depth image" info "${tmp}")
+# reconstruct --config: a missing file, and a setting that does not exist; neither leaves a run
+# folder behind.
+expect_error("^error: .*no_such_config.json: file not found$" reconstruct "${tmp}" --out
+             "${tmp}/run" --config "${tmp}/no_such_config.json")
+file(WRITE "${tmp}/config.json" "{\"fill\": {\"stereo\": {\"blok_size\": 5}}}")
+expect_error("^error: .*config.json: unknown setting 'fill.stereo.blok_size'$" reconstruct
+             "${tmp}" --out "${tmp}/run" --config "${tmp}/config.json")
+if(EXISTS "${tmp}/run")
+  message(FATAL_ERROR "a refused --config left ${tmp}/run behind")
+endif()
 
 # A real TUM folder written by capture, then damaged in three ways.
 execute_process(COMMAND "${GLASSFUSION}" capture --device dummy --out "${tmp}/good" --frames 3

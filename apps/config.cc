@@ -1,0 +1,130 @@
+#include "apps/config.h"
+
+#include "acquisition/errors.h"
+#include "acquisition/file_util.h"
+
+namespace gf {
+
+// JSON conversions of the Options structs, field by field (nlohmann's macros). They live here, at
+// the command line's edge, so that the algorithms' headers stay free of JSON.
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(IcpOptions, iterations, max_distance_m, max_normal_angle_deg,
+                                   plane_sigma_m, depth_weighting, noise_a_m, noise_b_per_m,
+                                   plane_huber, feature_sigma_px, feature_huber, feature_weight,
+                                   feature_min_level, min_inliers, max_rmse_m, convergence_step)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SurfOptions, hessian_threshold, octaves, initial_step, upright,
+                                   max_features)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(MatchOptions, ratio, cross_check, same_laplacian)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RansacOptions, inlier_threshold_m, confidence, max_iterations,
+                                   min_inliers)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(KeyframePolicy, max_rotation_deg, max_translation_m,
+                                   min_overlap, min_feature_inliers)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(TrackerOptions, pyramid_levels, icp, use_features, surf, match,
+                                   ransac, restart_m, restart_deg, keyframes, constant_velocity,
+                                   max_jump_m, max_jump_deg)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PoseRefinementOptions, reprojection_px, min_inliers,
+                                   max_change_m, max_change_deg, photometric)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PairSelectionOptions, min_matches, max_evaluations,
+                                   min_baseline_m, max_baseline_m, min_median_disparity_px,
+                                   max_near_disparity_px, max_near_disparity_sweep_px,
+                                   epipole_margin_px, allow_forward, max_rotation_deg, window,
+                                   lookahead, spread_third_view_forward, surf, match, refine)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PlaneSweepOptions, window_px, max_planes, max_step_px, min_ncc,
+                                   min_uniqueness, min_parallax_px, min_texture,
+                                   min_window_inside, smooth_small, smooth_large, downscale,
+                                   textureless_cost, hole_windows)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(
+    StereoFillOptions, min_baseline_m, epipole_margin_px, plane_sweep_forward, plane_sweep_always,
+    plane_sweep_after_sgbm, sweep_sgbm_rejects, sweep_shadows, plane_sweep, num_disparities,
+    rectify_alpha, block_size, uniqueness_ratio, speckle_window, speckle_range,
+    max_lr_difference_px, min_depth_m, max_depth_m, ring_px, min_ring_samples, ring_cell_px,
+    max_ring_error, ring_scale_correction, max_ring_scale, max_pair_error, edge_margin_px,
+    edge_margin_near_px, edge_jump, photometric_patch_px, photometric_hole_patches, min_ncc,
+    min_patch_std, max_mean_difference, occlusion_margin)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing, agreement,
+                                   correct_own_fills)
+
+namespace {
+
+nlohmann::json FillToJson(const FillStageOptions& o) {
+  return {{"queue_capacity", o.queue_capacity},
+          {"pairs", o.pairs},
+          {"stereo", o.stereo},
+          {"carry", o.carry}};
+}
+
+// Checks `given` (the file's tree) against `known` (every setting, current values): same keys,
+// objects where objects are, and values of the same kind. `where` is the dotted path so far.
+void CheckAgainst(const nlohmann::json& given, const nlohmann::json& known,
+                  const std::string& where, const std::string& path) {
+  const std::string name = where.empty() ? "the file" : "'" + where + "'";
+  if (known.is_object()) {
+    if (!given.is_object()) throw InputError(path, name + " must be an object of settings");
+    for (const auto& [key, value] : given.items()) {
+      const std::string child = where.empty() ? key : where + "." + key;
+      if (!known.contains(key)) throw InputError(path, "unknown setting '" + child + "'");
+      CheckAgainst(value, known.at(key), child, path);
+    }
+  } else if (known.is_boolean()) {
+    if (!given.is_boolean()) throw InputError(path, name + " must be true or false");
+  } else if (known.is_number_integer()) {
+    if (!given.is_number_integer()) throw InputError(path, name + " must be an integer");
+  } else if (known.is_number()) {
+    if (!given.is_number()) throw InputError(path, name + " must be a number");
+  } else if (known.is_array()) {
+    if (!given.is_array() || given.empty())
+      throw InputError(path, name + " must be a non-empty list of integers");
+    for (const auto& v : given)
+      if (!v.is_number_integer())
+        throw InputError(path, name + " must be a non-empty list of integers");
+  }
+}
+
+}  // namespace
+
+nlohmann::ordered_json SettingsToJson(const TrackerOptions& tracker, const FillStageOptions& fill) {
+  // Through nlohmann::json (keys sorted) into an ordered_json for report.json.
+  const nlohmann::json settings = {{"tracker", tracker}, {"fill", FillToJson(fill)}};
+  return nlohmann::ordered_json::parse(settings.dump());
+}
+
+void ApplyConfig(const std::string& text, const std::string& path, TrackerOptions* tracker,
+                 FillStageOptions* fill_options) {
+  nlohmann::json given;
+  try {
+    given = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(path, std::string("not valid JSON: ") + e.what());
+  }
+  nlohmann::json merged = {{"tracker", *tracker}, {"fill", FillToJson(*fill_options)}};
+  CheckAgainst(given, merged, "", path);
+  merged.merge_patch(given);
+  TrackerOptions t = *tracker;
+  FillStageOptions f = *fill_options;
+  try {
+    merged.at("tracker").get_to(t);
+    const nlohmann::json& fill = merged.at("fill");
+    fill.at("queue_capacity").get_to(f.queue_capacity);
+    fill.at("pairs").get_to(f.pairs);
+    fill.at("stereo").get_to(f.stereo);
+    fill.at("carry").get_to(f.carry);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path, std::string("bad setting: ") + e.what());
+  }
+  std::string problem;
+  for (const auto& [name, ok] : std::initializer_list<std::pair<const char*, bool>>{
+           {"tracker", t.Check(&problem)},
+           {"fill.pairs", f.pairs.Check(&problem)},
+           {"fill.stereo", f.stereo.Check(&problem)},
+           {"fill.carry", f.carry.Check(&problem)},
+           {"fill", f.Check(&problem)}})
+    if (!ok) throw InputError(path, std::string("settings refused (") + name + "): " + problem);
+  *tracker = t;
+  *fill_options = f;
+}
+
+void ApplyConfigFile(const std::string& path, TrackerOptions* tracker,
+                     FillStageOptions* fill_options) {
+  ApplyConfig(ReadTextFile(path), path, tracker, fill_options);
+}
+
+}  // namespace gf

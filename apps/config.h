@@ -1,0 +1,38 @@
+// `glassfusion reconstruct|bench --config FILE`: the tracker's and the fill's settings from a JSON
+// file.
+//
+// The file holds any part of the tree that SettingsToJson writes (report.json's config.settings
+// holds the whole tree of a run, so a run's settings can be fed back):
+//   {"tracker": {"pyramid_levels": 3, "icp": {...}, "surf": {...}, "match": {...},
+//                "ransac": {...}, "keyframes": {...}, ...},
+//    "fill": {"queue_capacity": 16, "pairs": {...}, "stereo": {..., "plane_sweep": {...}},
+//             "carry": {...}}}
+// Keys are the Options structs' field names. Settings the file leaves out keep their values.
+//
+// Usage:
+//   gf::ReconstructOptions options;  // throws InputError on any problem in the file:
+//   gf::ApplyConfigFile("config.json", &options.tracker, &options.fill_options);
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "apps/fill_stage.h"
+#include "registration/tracker.h"
+
+namespace gf {
+
+// Every setting a config file may set, with its current value.
+nlohmann::ordered_json SettingsToJson(const TrackerOptions& tracker, const FillStageOptions& fill);
+
+// Overrides the options with the settings in the JSON text `text`. Throws InputError naming `path`
+// and the problem: not JSON, not an object, an unknown setting, a value of the wrong type (a
+// fraction for an integer, a number for true/false), or values that the options' Check() refuses.
+// On a throw the options are unchanged.
+void ApplyConfig(const std::string& text, const std::string& path, TrackerOptions* tracker,
+                 FillStageOptions* fill);
+
+// ApplyConfig on the file at `path`; a missing or unreadable file is an InputError too.
+void ApplyConfigFile(const std::string& path, TrackerOptions* tracker, FillStageOptions* fill);
+
+}  // namespace gf

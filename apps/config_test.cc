@@ -1,0 +1,107 @@
+#include "apps/config.h"
+
+#include <gtest/gtest.h>
+
+#include "acquisition/errors.h"
+#include "apps/reconstruct.h"
+
+namespace gf {
+namespace {
+
+// The problem InputError reports for `text`, or "" when ApplyConfig accepts it.
+std::string Problem(const std::string& text, ReconstructOptions* options) {
+  try {
+    ApplyConfig(text, "run.json", &options->tracker, &options->fill_options);
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "run.json");
+    return e.problem();
+  }
+  return "";
+}
+
+TEST(Config, SettingsListEveryStageWithItsValues) {
+  ReconstructOptions options;
+  options.fill_options.stereo.plane_sweep.max_planes = 64;
+  const auto j = SettingsToJson(options.tracker, options.fill_options);
+  EXPECT_EQ(j["tracker"]["pyramid_levels"], 3);
+  EXPECT_EQ(j["tracker"]["icp"]["iterations"].get<std::vector<int>>(), (std::vector<int>{10, 6, 2}));
+  EXPECT_EQ(j["tracker"]["keyframes"]["max_translation_m"], 0.02);
+  EXPECT_EQ(j["fill"]["pairs"]["min_matches"], 40);
+  EXPECT_EQ(j["fill"]["pairs"]["refine"]["photometric"], true);
+  EXPECT_EQ(j["fill"]["stereo"]["block_size"], 5);
+  EXPECT_EQ(j["fill"]["stereo"]["plane_sweep"]["max_planes"], 64);
+  EXPECT_EQ(j["fill"]["carry"]["max_keyframes"], 15);
+  EXPECT_EQ(j["fill"]["queue_capacity"], 16);
+}
+
+TEST(Config, OverridesWhatTheFileSetsAndKeepsTheRest) {
+  ReconstructOptions options;
+  options.fill_options.stereo.plane_sweep_always = true;  // e.g. --sweep-all, not in the file
+  EXPECT_EQ(Problem(R"({"tracker": {"icp": {"iterations": [8, 4]}, "pyramid_levels": 2},
+                        "fill": {"stereo": {"block_size": 7, "min_ncc": 1,
+                                            "plane_sweep": {"hole_windows": false}},
+                                 "carry": {"agreement": 0.01}}})",
+                    &options),
+            "");
+  EXPECT_EQ(options.tracker.icp.iterations, (std::vector<int>{8, 4}));
+  EXPECT_EQ(options.tracker.pyramid_levels, 2);
+  EXPECT_EQ(options.fill_options.stereo.block_size, 7);
+  EXPECT_EQ(options.fill_options.stereo.min_ncc, 1.0);  // an integer is a fine number
+  EXPECT_FALSE(options.fill_options.stereo.plane_sweep.hole_windows);
+  EXPECT_EQ(options.fill_options.carry.agreement, 0.01);
+  EXPECT_TRUE(options.fill_options.stereo.plane_sweep_always);
+  EXPECT_EQ(options.fill_options.stereo.num_disparities, 128);
+  EXPECT_EQ(options.tracker.icp.max_distance_m, 0.08);
+}
+
+TEST(Config, ARunsSettingsReadBackGiveTheSameSettings) {
+  ReconstructOptions changed;
+  changed.tracker.use_features = false;
+  changed.fill_options.pairs.lookahead = 4;
+  changed.fill_options.stereo.max_ring_error = 0.025;
+  ReconstructOptions read;
+  EXPECT_EQ(Problem(SettingsToJson(changed.tracker, changed.fill_options).dump(), &read), "");
+  EXPECT_EQ(SettingsToJson(read.tracker, read.fill_options), SettingsToJson(changed.tracker, changed.fill_options));
+}
+
+TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
+  ReconstructOptions options;
+  const auto before = SettingsToJson(options.tracker, options.fill_options);
+  EXPECT_EQ(Problem(R"({"fill": {"stereo": {"blok_size": 5}}})", &options),
+            "unknown setting 'fill.stereo.blok_size'");
+  EXPECT_EQ(Problem(R"({"fill": {"stereo": {"block_size": 5.5}}})", &options),
+            "'fill.stereo.block_size' must be an integer");
+  EXPECT_EQ(Problem(R"({"tracker": {"use_features": 1}})", &options),
+            "'tracker.use_features' must be true or false");
+  EXPECT_EQ(Problem(R"({"fill": {"carry": {"agreement": "2%"}}})", &options),
+            "'fill.carry.agreement' must be a number");
+  EXPECT_EQ(Problem(R"({"fill": {"stereo": 3}})", &options),
+            "'fill.stereo' must be an object of settings");
+  EXPECT_EQ(Problem(R"({"tracker": {"icp": {"iterations": []}}})", &options),
+            "'tracker.icp.iterations' must be a non-empty list of integers");
+  EXPECT_EQ(Problem(R"({"tracker": {"max_jump_m": null}})", &options),
+            "'tracker.max_jump_m' must be a number");
+  EXPECT_EQ(Problem("[1, 2]", &options), "the file must be an object of settings");
+  EXPECT_EQ(Problem(R"({"fill": )", &options).rfind("not valid JSON", 0), 0u);
+  // Values of the right kind that the options' Check() refuses.
+  EXPECT_EQ(Problem(R"({"fill": {"stereo": {"block_size": 4}}})", &options),
+            "settings refused (fill.stereo): block_size must be odd");
+  EXPECT_EQ(Problem(R"({"fill": {"pairs": {"epipole_margin_px": 60}}})", &options),
+            "settings refused (fill): pairs.epipole_margin_px and stereo.epipole_margin_px must "
+            "be equal");
+  EXPECT_EQ(SettingsToJson(options.tracker, options.fill_options), before);
+  // Both together are fine.
+  EXPECT_EQ(Problem(R"({"fill": {"pairs": {"epipole_margin_px": 60},
+                                 "stereo": {"epipole_margin_px": 60}}})",
+                    &options),
+            "");
+  EXPECT_EQ(options.fill_options.stereo.epipole_margin_px, 60);
+}
+
+TEST(Config, MissingFileIsAnInputError) {
+  ReconstructOptions options;
+  EXPECT_THROW(ApplyConfigFile("/nonexistent/config.json", &options.tracker, &options.fill_options), InputError);
+}
+
+}  // namespace
+}  // namespace gf
