@@ -7,10 +7,10 @@
 #include "apps/bench.h"
 #include "apps/capture.h"
 #include "apps/colmap.h"
+#include "apps/config.h"
 #include "apps/demo.h"
 #include "apps/info.h"
 #include "apps/progress.h"
-#include "apps/config.h"
 #include "apps/reconstruct.h"
 #include "datasets/synth.h"
 
