@@ -115,12 +115,10 @@ CarriedFillResult CarryFills(const RgbdFrame& key1, const SE3& world_from_key1,
 
   std::vector<float> values;
   for (size_t s = 0; s < hole_pixels.size(); ++s) {
-    int count = 0;
-    for (size_t k = 0; k < n; ++k) count += candidates[s * n + k] > 0;
-    if (count < options.min_agreeing) continue;
     values.clear();
     for (size_t k = 0; k < n; ++k)
       if (candidates[s * n + k] > 0) values.push_back(candidates[s * n + k]);
+    if (static_cast<int>(values.size()) < options.min_agreeing) continue;
     std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
     const float median = values[values.size() / 2];
     const float tolerance = static_cast<float>(options.agreement) * median;
