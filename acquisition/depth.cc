@@ -144,6 +144,56 @@ bool ShadowOptions::Check(std::string* message) const {
   return true;
 }
 
+namespace {
+
+// The shadow of an edge continues along the edge. Where the near surface is itself a no-return
+// surface (clear glass, a dark object), its shadow and its own pixels form one no-return run that
+// the row test cannot split; the part of such a run on the far side, next to a shadow run of the
+// row above or below that starts at the same column beside the same far depth, is marked as
+// shadow as wide as that neighbour's. Down the image, then up.
+size_t ContinueShadowsVertically(const cv::Mat& depth_m, const ShadowOptions& options,
+                                 cv::Mat* hole_mask) {
+  const uint8_t no_return = static_cast<uint8_t>(HoleCode::kNoReturn);
+  const uint8_t shadow = static_cast<uint8_t>(HoleCode::kShadow);
+  const bool far_on_left = options.projector_baseline_m > 0;
+  const int cols = depth_m.cols;
+  size_t marked = 0;
+  // Position of the far surface's last pixel for a run starting (far on the left) at x, or ending
+  // (far on the right) at x; the run then grows away from it.
+  auto step = [&](int y, int from_y) {
+    const float* d = depth_m.ptr<float>(y);
+    const float* d_from = depth_m.ptr<float>(from_y);
+    uint8_t* h = hole_mask->ptr<uint8_t>(y);
+    const uint8_t* h_from = hole_mask->ptr<uint8_t>(from_y);
+    for (int x = 1; x + 1 < cols; ++x) {
+      const int far_x = far_on_left ? x - 1 : x + 1;
+      const int dir = far_on_left ? 1 : -1;
+      if (h[x] != no_return || h[far_x] != 0 || !(d[far_x] > 0)) continue;
+      // A shadow run in the neighbouring row beside the same far surface, starting within a pixel.
+      int width = 0;
+      for (int dx = -1; dx <= 1 && width == 0; ++dx) {
+        const int sx = x + dx, sfar = far_x + dx;
+        if (sx < 1 || sx + 1 >= cols || sfar < 0 || sfar >= cols) continue;
+        if (h_from[sx] != shadow || h_from[sfar] != 0 || !(d_from[sfar] > 0)) continue;
+        if (std::abs(d_from[sfar] - d[far_x]) > options.min_relative_jump * d[far_x]) continue;
+        for (int i = sx; i >= 0 && i < cols && h_from[i] == shadow; i += dir) ++width;
+      }
+      // Mark as much of this row's no-return run, up to that width, as shadow; a run no wider
+      // than that is left to the row test (it had a measured near side, or none at all).
+      int length = 0;
+      for (int i = x; i >= 0 && i < cols && h[i] == no_return; i += dir) ++length;
+      if (width == 0 || length <= width) continue;
+      for (int i = 0; i < width; ++i) h[x + i * dir] = shadow;
+      marked += width;
+    }
+  };
+  for (int y = 1; y < depth_m.rows; ++y) step(y, y - 1);
+  for (int y = depth_m.rows - 2; y >= 0; --y) step(y, y + 1);
+  return marked;
+}
+
+}  // namespace
+
 size_t ClassifyShadows(const cv::Mat& depth_m, double fx, const ShadowOptions& options,
                        cv::Mat* hole_mask) {
   std::string problem;
@@ -182,6 +232,7 @@ size_t ClassifyShadows(const cv::Mat& depth_m, double fx, const ShadowOptions& o
       marked += end - start;
     }
   }
+  if (options.continue_vertically) marked += ContinueShadowsVertically(depth_m, options, hole_mask);
   return marked;
 }
 

@@ -103,6 +103,9 @@ struct ShadowOptions {
       0.075;                        // projector position along the depth camera's x axis, metres
   double min_relative_jump = 0.05;  // far side must be this much deeper than the near side
   double width_tolerance_px = 2.0;  // a run may exceed the predicted width by this, pixels
+  // Continue shadows into the rows above and below where the near surface is a no-return surface
+  // itself (its shadow and its own pixels form one run).
+  bool continue_vertically = true;
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -112,5 +112,46 @@ TEST(ClassifyShadows, MarksTheStripLeftOfANearObjectOnly) {
   EXPECT_EQ(ClassifyShadows(depth2, fx, ShadowOptions{}, &holes2), 0u);
 }
 
+TEST(ClassifyShadows, ContinuesAShadowDownAClearGlassObject) {
+  // A bottle at 1.5 m over columns [300, 400) in front of a 3 m background: a measured label in
+  // rows [0, 10), clear glass (no return) in rows [10, 30). Its shadow (13 px, left of it) is a
+  // run of its own beside the label, but merges with the glass below it into one no-return run
+  // between two far sides, which the row test cannot split.
+  const double fx = 525.0;
+  cv::Mat depth(30, 640, CV_32FC1, cv::Scalar(3.0f));
+  cv::Mat holes(30, 640, CV_8UC1, cv::Scalar(0));
+  depth(cv::Rect(300, 0, 100, 10)).setTo(1.5f);
+  depth(cv::Rect(287, 0, 13, 30)).setTo(0.f);  // the shadow
+  holes(cv::Rect(287, 0, 13, 30)).setTo(static_cast<uint8_t>(HoleCode::kNoReturn));
+  depth(cv::Rect(300, 10, 100, 20)).setTo(0.f);  // the glass
+  holes(cv::Rect(300, 10, 100, 20)).setTo(static_cast<uint8_t>(HoleCode::kNoReturn));
+  const cv::Mat original = holes.clone();
+
+  ShadowOptions rows_only;
+  rows_only.continue_vertically = false;
+  cv::Mat by_rows = original.clone();
+  EXPECT_EQ(ClassifyShadows(depth, fx, rows_only, &by_rows), 13u * 10);
+  EXPECT_EQ(by_rows.at<uint8_t>(20, 290), static_cast<uint8_t>(HoleCode::kNoReturn));
+
+  // Continued down the glass rows, as wide as the shadow above; the glass stays no-return.
+  EXPECT_EQ(ClassifyShadows(depth, fx, ShadowOptions{}, &holes), 13u * 30);
+  for (int y : {0, 9, 10, 29}) {
+    EXPECT_EQ(holes.at<uint8_t>(y, 287), static_cast<uint8_t>(HoleCode::kShadow)) << y;
+    EXPECT_EQ(holes.at<uint8_t>(y, 299), static_cast<uint8_t>(HoleCode::kShadow)) << y;
+  }
+  EXPECT_EQ(holes.at<uint8_t>(20, 300), static_cast<uint8_t>(HoleCode::kNoReturn));
+  EXPECT_EQ(holes.at<uint8_t>(20, 399), static_cast<uint8_t>(HoleCode::kNoReturn));
+
+  // Without a shadow run to continue from (glass the whole height), nothing is marked; nor where
+  // the far side beside the run is at another depth than beside the shadow above it.
+  cv::Mat all_glass_depth = depth.clone(), all_glass = original.clone();
+  all_glass_depth(cv::Rect(300, 0, 100, 10)).setTo(0.f);
+  all_glass(cv::Rect(300, 0, 100, 10)).setTo(static_cast<uint8_t>(HoleCode::kNoReturn));
+  EXPECT_EQ(ClassifyShadows(all_glass_depth, fx, ShadowOptions{}, &all_glass), 0u);
+  cv::Mat other_far = depth.clone(), other_far_holes = original.clone();
+  other_far(cv::Rect(0, 10, 287, 20)).setTo(2.0f);
+  EXPECT_EQ(ClassifyShadows(other_far, fx, ShadowOptions{}, &other_far_holes), 13u * 10);
+}
+
 }  // namespace
 }  // namespace gf

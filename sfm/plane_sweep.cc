@@ -7,6 +7,7 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
+#include "acquisition/depth.h"
 #include "acquisition/errors.h"
 
 namespace gf {
@@ -428,10 +429,14 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
   window_statistics(c_roi, &n1, &mean_i, &var_i);
   // Hole windows: a hole pixel's window uses the hole pixels only (weights h_roi, keyframe 1's
   // hole share of its coverage), where they fill at least min_window_inside of it; its statistics
-  // replace the full window's there (use_hole 1).
+  // replace the full window's there (use_hole 1). Projector-shadow pixels are left out of them:
+  // they show the background beside a foreground's edge, which a no-return surface's window
+  // (clear glass beside the shadow it casts) would otherwise match at that edge's depth.
   cv::Mat h_roi, use_hole;
   if (options.hole_windows) {
-    cv::Mat holes_full = undistort(key1.hole_mask != 0, cv::INTER_NEAREST), holes;
+    const cv::Mat own_holes =
+        (key1.hole_mask != 0) & (key1.hole_mask != static_cast<uint8_t>(HoleCode::kShadow));
+    cv::Mat holes_full = undistort(own_holes, cv::INTER_NEAREST), holes;
     holes_full.convertTo(holes_full, CV_32F, 1.0 / 255);
     cv::resize(holes_full, holes, work, 0, 0, cv::INTER_AREA);
     h_roi = holes(roi).mul(c_roi);

@@ -55,7 +55,10 @@ struct PlaneSweepOptions {
   int textureless_cost = 30;  // cost of every plane where keyframe 1's window has no texture
   // Windows of hole pixels use hole pixels only (where they fill min_window_inside of the
   // window): a measured surface's texture then cannot carry its depth into the hole next to it
-  // (foreground fattening, e.g. a label's depth onto the clear glass below it).
+  // (foreground fattening, e.g. a label's depth onto the clear glass below it). Projector-shadow
+  // pixels do not count as hole pixels here (they show the background beside an edge). Leaving
+  // them out took the demo scene's clear-glass fills at the glass's depth from 182 to 133, with
+  // no loss of fill on ICL, TUM or the synthetic scenes.
   bool hole_windows = true;
   bool Check(std::string* message = nullptr) const;
 };

@@ -105,7 +105,9 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   EXPECT_LE(s.clear_glass_as_glass, s.clear_glass_filled / 100);
 
   // The default: SGBM, then the plane sweep (with a third keyframe, as in the pipeline) over the
-  // holes SGBM left empty. Fills more than SGBM alone with the same third view.
+  // holes SGBM left empty, projector shadows apart. On this pair those are nearly all shadows (63
+  // pixels are not, since shadows are continued down the bottle's glass), so it fills as much as
+  // SGBM alone with the same third view; told to sweep the shadows as well, it fills more.
   const ThirdView third{&c.frame, poses[10].Inverse() * poses[4]};
   const StereoFillResult r3 =
       FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, sgbm_only, third);
@@ -119,10 +121,15 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   EXPECT_EQ(d.method, "rectified SGBM + plane sweep");
   EXPECT_EQ(cv::norm(d.filled_depth, a.frame.depth, cv::NORM_INF, measured), 0.0);
   const FillScore sd = Score(a, d);
-  EXPECT_GT(d.filled_pixels, r3.filled_pixels) << r3.BriefReport();
+  EXPECT_GE(d.filled_pixels, r3.filled_pixels) << r3.BriefReport();
+  StereoFillOptions with_shadows;
+  with_shadows.sweep_shadows = true;
+  const StereoFillResult ds =
+      FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, with_shadows, third);
+  EXPECT_GT(ds.filled_pixels, r3.filled_pixels + 100) << ds.BriefReport();
   // Measured: 85.4% of the glossy, dark and textured-glass holes filled, median error 0.42%, 90th
-  // percentile 1.5%; 1 of 974 filled clear-glass pixels nearer the glass than the background
-  // (87.5% and 3 of 1110 when the sweep also retries the pixels whose SGBM depth was dropped).
+  // percentile 1.4%; 1 of 970 filled clear-glass pixels nearer the glass than the background
+  // (86.1% and 2 of 1105 when the sweep also retries the pixels whose SGBM depth was dropped).
   EXPECT_GT(sd.fill_rate, 0.82);
   EXPECT_LT(Percentile(sd.errors, 0.5), 0.01);
   EXPECT_LT(Percentile(sd.errors, 0.9), 0.03);
@@ -131,7 +138,8 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   // The sweep's hole windows (hole pixels correlate over hole pixels only) keep the printed
   // label's depth off the clear glass below it. Measured with the sweep also retrying the pixels
   // whose SGBM depth was dropped (sweep_sgbm_rejects, where the sweep meets that glass most):
-  // 3 of 1110 with hole windows, 28 of 1099 without.
+  // 2 of 1105 with hole windows, 18 of 1078 without (3 of 1110 and 28 of 1099 before shadows
+  // were continued down the glass and left out of the hole windows).
   StereoFillOptions retry;
   retry.sweep_sgbm_rejects = true;
   StereoFillOptions retry_full_windows = retry;
