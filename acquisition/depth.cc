@@ -158,8 +158,8 @@ size_t ContinueShadowsVertically(const cv::Mat& depth_m, const ShadowOptions& op
   const bool far_on_left = options.projector_baseline_m > 0;
   const int cols = depth_m.cols;
   size_t marked = 0;
-  // Position of the far surface's last pixel for a run starting (far on the left) at x, or ending
-  // (far on the right) at x; the run then grows away from it.
+  // Row y, continuing the shadows of row from_y. x is a run's first pixel next to the far surface
+  // (far_x); the run extends from x away from the far side (dir).
   auto step = [&](int y, int from_y) {
     const float* d = depth_m.ptr<float>(y);
     const float* d_from = depth_m.ptr<float>(from_y);

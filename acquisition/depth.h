@@ -111,7 +111,9 @@ struct ShadowOptions {
 
 // Reclassifies kNoReturn runs along image rows as kShadow where a run lies between a far surface on
 // the side away from the projector and a near surface on the projector's side, and is no wider than
-// the shadow that depth step predicts. depth_m and hole_mask are in the depth camera's image;
+// the shadow that depth step predicts; with continue_vertically, such shadows are then continued
+// into neighbouring rows where the near surface returns nothing itself (the shadow and that
+// surface form one run there). depth_m and hole_mask are in the depth camera's image;
 // fx is the depth camera's focal length in pixels. Returns the number of pixels reclassified.
 size_t ClassifyShadows(const cv::Mat& depth_m, double fx, const ShadowOptions& options,
                        cv::Mat* hole_mask);
