@@ -156,6 +156,7 @@ size_t ContinueShadowsVertically(const cv::Mat& depth_m, const ShadowOptions& op
   const uint8_t no_return = static_cast<uint8_t>(HoleCode::kNoReturn);
   const uint8_t shadow = static_cast<uint8_t>(HoleCode::kShadow);
   const bool far_on_left = options.projector_baseline_m > 0;
+  const int dir = far_on_left ? 1 : -1;  // away from the far side
   const int cols = depth_m.cols;
   size_t marked = 0;
   // Row y, continuing the shadows of row from_y. x is a run's first pixel next to the far surface
@@ -166,8 +167,7 @@ size_t ContinueShadowsVertically(const cv::Mat& depth_m, const ShadowOptions& op
     uint8_t* h = hole_mask->ptr<uint8_t>(y);
     const uint8_t* h_from = hole_mask->ptr<uint8_t>(from_y);
     for (int x = 1; x + 1 < cols; ++x) {
-      const int far_x = far_on_left ? x - 1 : x + 1;
-      const int dir = far_on_left ? 1 : -1;
+      const int far_x = x - dir;
       if (h[x] != no_return || h[far_x] != 0 || !(d[far_x] > 0)) continue;
       // A shadow run in the neighbouring row beside the same far surface, starting within a pixel.
       int width = 0;

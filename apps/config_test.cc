@@ -24,7 +24,8 @@ TEST(Config, SettingsListEveryStageWithItsValues) {
   options.fill_options.stereo.plane_sweep.max_planes = 64;
   const auto j = SettingsToJson(options.tracker, options.fill_options);
   EXPECT_EQ(j["tracker"]["pyramid_levels"], 3);
-  EXPECT_EQ(j["tracker"]["icp"]["iterations"].get<std::vector<int>>(), (std::vector<int>{10, 6, 2}));
+  EXPECT_EQ(j["tracker"]["icp"]["iterations"].get<std::vector<int>>(),
+            (std::vector<int>{10, 6, 2}));
   EXPECT_EQ(j["tracker"]["keyframes"]["max_translation_m"], 0.02);
   EXPECT_EQ(j["fill"]["pairs"]["min_matches"], 40);
   EXPECT_EQ(j["fill"]["pairs"]["refine"]["photometric"], true);
@@ -61,7 +62,8 @@ TEST(Config, ARunsSettingsReadBackGiveTheSameSettings) {
   changed.fill_options.stereo.max_ring_error = 0.025;
   ReconstructOptions read;
   EXPECT_EQ(Problem(SettingsToJson(changed.tracker, changed.fill_options).dump(), &read), "");
-  EXPECT_EQ(SettingsToJson(read.tracker, read.fill_options), SettingsToJson(changed.tracker, changed.fill_options));
+  EXPECT_EQ(SettingsToJson(read.tracker, read.fill_options),
+            SettingsToJson(changed.tracker, changed.fill_options));
 }
 
 TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
@@ -100,7 +102,8 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
 
 TEST(Config, MissingFileIsAnInputError) {
   ReconstructOptions options;
-  EXPECT_THROW(ApplyConfigFile("/nonexistent/config.json", &options.tracker, &options.fill_options), InputError);
+  EXPECT_THROW(ApplyConfigFile("/nonexistent/config.json", &options.tracker, &options.fill_options),
+               InputError);
 }
 
 }  // namespace
