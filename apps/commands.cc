@@ -248,6 +248,9 @@ void RegisterCommands(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--data", options->data_dir,
                     "folder of datasets to summarise too (default ../shared/datasets if present)");
+    cmd->add_option("--config", options->config_file,
+                    "JSON file of tracker and fill settings for the reconstruction, as for "
+                    "reconstruct");
     cmd->callback([options] { RunDemo(*options); });
   }
 }

@@ -13,6 +13,7 @@
 #include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
+#include "apps/config.h"
 #include "apps/info.h"
 #include "apps/progress.h"
 #include "apps/reconstruct.h"
@@ -82,6 +83,11 @@ bool DemoOptions::Check(std::string* message) const {
 void RunDemo(const DemoOptions& options) {
   std::string problem;
   if (!options.Check(&problem)) throw InputError("demo", problem);
+  // The reconstruction's settings first: a bad config file stops the demo before it writes.
+  ReconstructOptions reconstruct;
+  reconstruct.config_file = options.config_file;
+  if (!options.config_file.empty())
+    ApplyConfigFile(options.config_file, &reconstruct.tracker, &reconstruct.fill_options);
   std::error_code ec;
   fs::create_directories(options.out_dir, ec);
   if (ec) throw InputError(options.out_dir, "cannot create output folder: " + ec.message());
@@ -137,7 +143,6 @@ void RunDemo(const DemoOptions& options) {
       throw InputError(run_dir, "exists and is not a GlassFusion run folder");
     fs::remove_all(run_dir);
   }
-  ReconstructOptions reconstruct;
   reconstruct.input = scene_dir;
   reconstruct.out_dir = run_dir;
   const ReconstructSummary run = RunReconstruct(reconstruct);
@@ -239,6 +244,8 @@ void RunDemo(const DemoOptions& options) {
   report["fill_by_material"] = fill_by_material;
   report["clear_glass_filled_at_glass_depth"] = clear_glass_at_glass_depth;
   report["run"] = run_dir;
+  report["config_file"] = options.config_file.empty() ? nlohmann::json()
+                                                      : nlohmann::json(options.config_file);
   report["datasets"] = nlohmann::json::array();
   for (const std::string& input : inputs) {
     TerminalProgress progress("demo: " + fs::path(input).filename().string(), std::nullopt);
@@ -271,7 +278,11 @@ void RunDemo(const DemoOptions& options) {
        << run.frames << " frames at " << static_cast<int>(run.fps) << " fps, " << run.keyframes
        << " keyframes, trajectory error (ATE) "
        << (ate.success ? std::to_string(ate.ate_rmse_m * 1000.0).substr(0, 4) + " mm" : "n/a")
-       << ". Keyframe holes filled by stereo, scored against the depth of what the colour camera "
+       << ". "
+       << (options.config_file.empty()
+               ? std::string()
+               : "Settings from <code>" + HtmlEscape(options.config_file) + "</code>. ")
+       << "Keyframe holes filled by stereo, scored against the depth of what the colour camera "
           "sees (\"good\": within 3%):</p><table><tr><th>material</th><th>holes</th><th>filled"
           "</th><th>good</th><th>median error</th></tr>";
   for (int m = 0; m < 5; ++m)

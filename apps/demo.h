@@ -7,6 +7,8 @@
 // found under --data; then reconstructs the scene into OUT/run (tracking + stereo fill) and
 // reports the trajectory error and, per material, how many keyframe holes were filled and how
 // well (against the ground-truth depth of what the colour camera sees), with a fill overlay.
+// With a config file, the reconstruction uses its settings (and report.json lists them), so that
+// a setting's effect on each material can be measured on the demo scene.
 #pragma once
 
 #include <string>
@@ -17,6 +19,8 @@ struct DemoOptions {
   std::string out_dir = "demo-out";
   std::string data_dir;  // "" = ../shared/datasets when present
   int frames = 30;       // frames of the glass scene
+  std::string config_file;  // --config FILE: tracker and fill settings for the reconstruction
+                            // (apps/config.h), as `reconstruct --config` takes them
   bool Check(std::string* message = nullptr) const;
 };
 

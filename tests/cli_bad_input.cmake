@@ -44,6 +44,12 @@ expect_error("^error: .*config.json: unknown setting 'fill.stereo.blok_size'$" r
 if(EXISTS "${tmp}/run")
   message(FATAL_ERROR "a refused --config left ${tmp}/run behind")
 endif()
+# demo --config: refused before the demo writes anything.
+expect_error("^error: .*config.json: unknown setting 'fill.stereo.blok_size'$" demo --out
+             "${tmp}/demo" --config "${tmp}/config.json")
+if(EXISTS "${tmp}/demo")
+  message(FATAL_ERROR "a refused demo --config left ${tmp}/demo behind")
+endif()
 
 # A real TUM folder written by capture, then damaged in three ways.
 execute_process(COMMAND "${GLASSFUSION}" capture --device dummy --out "${tmp}/good" --frames 3
