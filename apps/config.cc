@@ -16,8 +16,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SurfOptions, hessian_threshold, octaves, init
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(MatchOptions, ratio, cross_check, same_laplacian)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RansacOptions, inlier_threshold_m, confidence, max_iterations,
                                    min_inliers)
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(KeyframePolicy, max_rotation_deg, max_translation_m,
-                                   min_overlap, min_feature_inliers)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(KeyframePolicy, max_rotation_deg, max_translation_m, min_overlap,
+                                   min_feature_inliers)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(TrackerOptions, pyramid_levels, icp, use_features, surf, match,
                                    ransac, restart_m, restart_deg, keyframes, constant_velocity,
                                    max_jump_m, max_jump_deg)
@@ -29,17 +29,17 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PairSelectionOptions, min_matches, max_evalua
                                    epipole_margin_px, allow_forward, max_rotation_deg, window,
                                    lookahead, spread_third_view_forward, surf, match, refine)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PlaneSweepOptions, window_px, max_planes, max_step_px, min_ncc,
-                                   min_uniqueness, min_parallax_px, min_texture,
-                                   min_window_inside, smooth_small, smooth_large, downscale,
-                                   textureless_cost, hole_windows)
+                                   min_uniqueness, min_parallax_px, min_texture, min_window_inside,
+                                   smooth_small, smooth_large, downscale, textureless_cost,
+                                   hole_windows)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(
     StereoFillOptions, min_baseline_m, epipole_margin_px, plane_sweep_forward, plane_sweep_always,
     plane_sweep_after_sgbm, sweep_sgbm_rejects, sweep_shadows, plane_sweep, num_disparities,
     rectify_alpha, block_size, uniqueness_ratio, speckle_window, speckle_range,
     max_lr_difference_px, min_depth_m, max_depth_m, ring_px, min_ring_samples, ring_cell_px,
     max_ring_error, ring_scale_correction, max_ring_scale, max_pair_error, edge_margin_px,
-    edge_margin_near_px, edge_jump, photometric_patch_px, photometric_hole_patches, min_ncc,
-    min_patch_std, max_mean_difference, occlusion_margin)
+    edge_margin_near_px, edge_jump, hole_edge_margin_near_px, photometric_patch_px,
+    photometric_hole_patches, min_ncc, min_patch_std, max_mean_difference, occlusion_margin)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing, agreement,
                                    correct_own_fills)
 

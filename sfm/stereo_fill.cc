@@ -180,6 +180,47 @@ Holes FindHoles(const cv::Mat& hole_mask) {
   return h;
 }
 
+// Block matching spreads a textured surface's depth over the textureless pixels next to it
+// (foreground fattening): a copy of `stereo` (CV_32F, 0 = none) without the depths that have a
+// farther one within margin_near_px (the near side of a discontinuity) or a nearer one within
+// margin_far_px, a discontinuity being a relative step over `jump`. Max/min filters over the
+// window, so that a gap in the stereo (pixels the left-right check dropped) does not hide it.
+cv::Mat WithoutEdgeMargins(const cv::Mat& stereo_in, int margin_far_px, int margin_near_px,
+                           double jump) {
+  cv::Mat stereo = stereo_in.clone();
+  if (margin_far_px <= 0 && margin_near_px <= 0) return stereo;
+  auto square = [](int r) {
+    return cv::getStructuringElement(cv::MORPH_RECT, {2 * r + 1, 2 * r + 1});
+  };
+  cv::Mat farthest, nearest = stereo.clone();
+  nearest.setTo(std::numeric_limits<float>::max(), stereo <= 0.f);
+  cv::dilate(stereo, farthest, square(margin_near_px));
+  cv::erode(nearest, nearest, square(margin_far_px));
+  const float up = static_cast<float>(1.0 + jump), down = static_cast<float>(1.0 - jump);
+  for (int y = 0; y < stereo.rows; ++y) {
+    float* s = stereo.ptr<float>(y);
+    const float* f = farthest.ptr<float>(y);
+    const float* n = nearest.ptr<float>(y);
+    for (int x = 0; x < stereo.cols; ++x)
+      if (f[x] > s[x] * up || n[x] < s[x] * down) s[x] = 0.f;
+  }
+  return stereo;
+}
+
+// Clear glass's rim is a colour edge at the glass's depth, and block matching spreads that depth
+// over the background seen through the glass: inside a hole, a near depth beside a farther one.
+// A glossy or dark object's border, by contrast, meets the measured background outside its hole.
+// Drops, in place, the hole pixels' stereo depth that has a farther stereo depth on another hole
+// pixel within margin_px (a step over `jump`).
+void DropNearSideWithinHoles(const cv::Mat& hole_mask, int margin_px, double jump,
+                             cv::Mat* stereo) {
+  if (margin_px <= 0) return;
+  cv::Mat in_holes = stereo->clone();
+  in_holes.setTo(0.f, hole_mask == 0);
+  const cv::Mat kept = WithoutEdgeMargins(in_holes, 0, margin_px, jump);
+  stereo->setTo(0.f, (in_holes > 0.f) & (kept <= 0.f));
+}
+
 // Validates one stereo depth image (keyframe 1's pixels, 0 = none) against the sensor and fills
 // the hole pixels that pass, are still empty in *result and, when `fillable` is given (CV_8U),
 // non-zero there. Appends the stereo-vs-sensor errors (relative, metres) on measured pixels.
@@ -190,30 +231,8 @@ bool ValidateAndFill(const cv::Mat& stereo_in, const RgbdFrame& key1, const Hole
                      StereoFillResult* r, std::vector<float>* errors, std::vector<float>* errors_m,
                      const cv::Mat& fillable = cv::Mat()) {
   StereoFillResult& result = *r;
-  cv::Mat stereo = stereo_in.clone();
-  // Block matching spreads a textured surface's depth over the textureless pixels next to it
-  // (foreground fattening): drop stereo depth with a farther stereo depth within
-  // edge_margin_near_px (the near side of a discontinuity) or a nearer one within edge_margin_px.
-  // Max/min filters over the window, so that a gap in the stereo (pixels the left-right check
-  // dropped) does not hide the discontinuity.
-  if (options.edge_margin_px > 0 || options.edge_margin_near_px > 0) {
-    auto square = [](int r) {
-      return cv::getStructuringElement(cv::MORPH_RECT, {2 * r + 1, 2 * r + 1});
-    };
-    cv::Mat farthest, nearest = stereo.clone();
-    nearest.setTo(std::numeric_limits<float>::max(), stereo <= 0.f);
-    cv::dilate(stereo, farthest, square(options.edge_margin_near_px));
-    cv::erode(nearest, nearest, square(options.edge_margin_px));
-    const float up = static_cast<float>(1.0 + options.edge_jump),
-                down = static_cast<float>(1.0 - options.edge_jump);
-    for (int y = 0; y < stereo.rows; ++y) {
-      float* s = stereo.ptr<float>(y);
-      const float* f = farthest.ptr<float>(y);
-      const float* n = nearest.ptr<float>(y);
-      for (int x = 0; x < stereo.cols; ++x)
-        if (f[x] > s[x] * up || n[x] < s[x] * down) s[x] = 0.f;
-    }
-  }
+  const cv::Mat stereo = WithoutEdgeMargins(stereo_in, options.edge_margin_px,
+                                            options.edge_margin_near_px, options.edge_jump);
 
   // Validation against the sensor: over the image, and in a ring around each hole.
   std::vector<float> all_errors;
@@ -349,7 +368,8 @@ bool StereoFillOptions::Check(std::string* message) const {
   if (!(rectify_alpha >= -1 && rectify_alpha <= 1)) return fail("rectify_alpha must be in [-1, 1]");
   if (!(max_lr_difference_px >= 0) || !(min_depth_m > 0) || !(max_depth_m > min_depth_m))
     return fail("need lr difference >= 0 and 0 < min_depth_m < max_depth_m");
-  if (edge_margin_px < 0 || edge_margin_near_px < 0 || !(edge_jump > 0))
+  if (edge_margin_px < 0 || edge_margin_near_px < 0 || hole_edge_margin_near_px < 0 ||
+      !(edge_jump > 0))
     return fail("edge margins must be >= 0 and edge_jump positive");
   if (ring_px < 1 || min_ring_samples < 1 || ring_cell_px < 0 || !(max_ring_error > 0) ||
       !(max_pair_error > 0))
@@ -447,7 +467,9 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
       if (cell == 0.f || p.z() < cell) cell = static_cast<float>(p.z());
     }
     result.method = "rectified SGBM";
-    stereo.copyTo(result.stereo_depth);
+    stereo.copyTo(result.stereo_depth);  // all of it: the sweep does not retry what is dropped
+    DropNearSideWithinHoles(key1.hole_mask, options.hole_edge_margin_near_px, options.edge_jump,
+                            &stereo);
     agrees =
         ValidateAndFill(stereo, key1, holes, photometric, options, &result, &errors, &errors_m);
   }
