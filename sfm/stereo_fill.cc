@@ -467,7 +467,8 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
       if (cell == 0.f || p.z() < cell) cell = static_cast<float>(p.z());
     }
     result.method = "rectified SGBM";
-    stereo.copyTo(result.stereo_depth);  // all of it: the sweep does not retry what is dropped
+    // All of it: what is dropped below stays empty (unless sweep_sgbm_rejects: the sweep retries).
+    stereo.copyTo(result.stereo_depth);
     DropNearSideWithinHoles(key1.hole_mask, options.hole_edge_margin_near_px, options.edge_jump,
                             &stereo);
     agrees =
