@@ -1,5 +1,5 @@
-// `glassfusion reconstruct|bench --config FILE`: the tracker's and the fill's settings from a JSON
-// file.
+// `glassfusion reconstruct|bench|demo --config FILE`: the tracker's and the fill's settings from
+// a JSON file.
 //
 // The file holds any part of the tree that SettingsToJson writes (report.json's config.settings
 // holds the whole tree of a run, so a run's settings can be fed back):
