@@ -171,7 +171,10 @@ SynthFrame RenderFrame(const Scene& scene, const Camera& camera, const SE3& worl
           // What the colour camera sees.
           if (surface.material == Material::kClearGlass) {
             Hit behind;
-            if (scene.Intersect(origin, dir, first.t + 1e-4, 1e3, true, &behind)) {
+            // The nearest surface that is not clear glass, searched from the camera rather than
+            // from just past the glass, so that a surface touching the glass (the table under a
+            // bottle's base) is not stepped over.
+            if (scene.Intersect(origin, dir, 1e-4, 1e3, true, &behind)) {
               visible_z = static_cast<float>(behind.t / ray_norm);
               bgr = 0.82f * scene.Shade(behind, dir) + 0.18f * surface.base_bgr;
             }

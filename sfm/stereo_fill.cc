@@ -211,14 +211,74 @@ cv::Mat WithoutEdgeMargins(const cv::Mat& stereo_in, int margin_far_px, int marg
 // over the background seen through the glass: inside a hole, a near depth beside a farther one.
 // A glossy or dark object's border, by contrast, meets the measured background outside its hole.
 // Drops, in place, the hole pixels' stereo depth that has a farther stereo depth on another hole
-// pixel within margin_px (a step over `jump`).
-void DropNearSideWithinHoles(const cv::Mat& hole_mask, int margin_px, double jump,
-                             cv::Mat* stereo) {
+// pixel within margin_px (a step over `jump`); only on the pixels where `where` (CV_8U) is non-zero
+// when it is given.
+void DropNearSideWithinHoles(const cv::Mat& hole_mask, int margin_px, double jump, cv::Mat* stereo,
+                             const cv::Mat& where = cv::Mat()) {
   if (margin_px <= 0) return;
   cv::Mat in_holes = stereo->clone();
   in_holes.setTo(0.f, hole_mask == 0);
   const cv::Mat kept = WithoutEdgeMargins(in_holes, 0, margin_px, jump);
-  stereo->setTo(0.f, (in_holes > 0.f) & (kept <= 0.f));
+  cv::Mat dropped = (in_holes > 0.f) & (kept <= 0.f);
+  if (!where.empty()) dropped &= where != 0;
+  stereo->setTo(0.f, dropped);
+}
+
+// The rims of the holes that SGBM sees into (StereoFillOptions::see_through_ratio): CV_8U, 255 on
+// the hole pixels within see_through_rim_px of the border of a hole whose median SGBM depth
+// (`stereo` on its pixels) is at least (1 + see_through_ratio) times the median sensor depth in
+// its validation ring. Empty when no hole qualifies.
+cv::Mat SeeThroughRim(const RgbdFrame& key1, const Holes& holes, const cv::Mat& stereo,
+                      const StereoFillOptions& options) {
+  if (options.see_through_rim_px <= 0) return {};
+  std::vector<std::vector<float>> inside(holes.count), ring(holes.count);
+  for (int y = 0; y < stereo.rows; ++y)
+    for (int x = 0; x < stereo.cols; ++x) {
+      const int label = holes.labels.at<int>(y, x);
+      if (key1.hole_mask.at<uint8_t>(y, x)) {
+        if (const float s = stereo.at<float>(y, x); s > 0) inside[label].push_back(s);
+      } else if (holes.distance.at<float>(y, x) <= options.ring_px) {
+        if (const float k = key1.depth.at<float>(y, x); k > 0) ring[label].push_back(k);
+      }
+    }
+  // A hole that reaches the image's edge is not seen whole (ICL-NUIM's invalid border frame is
+  // one): what SGBM sees in it is the scene going on out of view.
+  std::vector<uint8_t> at_edge(holes.count, 0);
+  for (int y = 0; y < stereo.rows; ++y)
+    for (int x = 0; x < stereo.cols; x += (y == 0 || y == stereo.rows - 1) ? 1 : stereo.cols - 1)
+      if (key1.hole_mask.at<uint8_t>(y, x)) at_edge[holes.labels.at<int>(y, x)] = 1;
+  std::vector<uint8_t> sees_through(holes.count, 0);
+  bool any = false;
+  const size_t enough = static_cast<size_t>(options.min_ring_samples);
+  for (size_t i = 0; i < holes.count; ++i) {
+    if (at_edge[i] || inside[i].size() < enough || ring[i].size() < enough) continue;
+    sees_through[i] = Median(inside[i]) > (1.0 + options.see_through_ratio) * Median(ring[i]);
+    any |= sees_through[i] != 0;
+  }
+  if (!any) return {};
+  cv::Mat inner;  // distance to the nearest measured pixel
+  cv::distanceTransform(key1.hole_mask, inner, cv::DIST_L2, 3);
+  cv::Mat rim = cv::Mat::zeros(stereo.size(), CV_8UC1);
+  for (int y = 0; y < rim.rows; ++y)
+    for (int x = 0; x < rim.cols; ++x)
+      if (key1.hole_mask.at<uint8_t>(y, x) && sees_through[holes.labels.at<int>(y, x)] &&
+          inner.at<float>(y, x) <= options.see_through_rim_px)
+        rim.at<uint8_t>(y, x) = 255;
+  return rim;
+}
+
+// Keeps, in place, the rim pixels of the holes where SGBM's validated depth filled at least
+// min_filled pixels: where its depth did not pass validation, its view of the hole does not count.
+void KeepRimsOfFilledHoles(const Holes& holes, const cv::Mat& fill_mask, int min_filled,
+                           cv::Mat* rim) {
+  std::vector<int> filled(holes.count, 0);
+  for (int y = 0; y < fill_mask.rows; ++y)
+    for (int x = 0; x < fill_mask.cols; ++x)
+      if (fill_mask.at<uint8_t>(y, x)) ++filled[holes.labels.at<int>(y, x)];
+  for (int y = 0; y < rim->rows; ++y)
+    for (int x = 0; x < rim->cols; ++x)
+      if (rim->at<uint8_t>(y, x) && filled[holes.labels.at<int>(y, x)] < min_filled)
+        rim->at<uint8_t>(y, x) = 0;
 }
 
 // Validates one stereo depth image (keyframe 1's pixels, 0 = none) against the sensor and fills
@@ -371,6 +431,9 @@ bool StereoFillOptions::Check(std::string* message) const {
   if (edge_margin_px < 0 || edge_margin_near_px < 0 || hole_edge_margin_near_px < 0 ||
       !(edge_jump > 0))
     return fail("edge margins must be >= 0 and edge_jump positive");
+  if (!(see_through_ratio > -1) || see_through_rim_px < 0 || see_through_margin_px < 0)
+    return fail(
+        "see_through_ratio must be > -1, see_through_rim_px and see_through_margin_px >= 0");
   if (ring_px < 1 || min_ring_samples < 1 || ring_cell_px < 0 || !(max_ring_error > 0) ||
       !(max_pair_error > 0))
     return fail("ring and error thresholds must be positive");
@@ -440,6 +503,7 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   const Holes holes = FindHoles(key1.hole_mask);
   std::vector<float> errors, errors_m;  // stereo vs sensor on measured pixels, over all methods
   bool agrees = false;                  // some method agreed with the sensor
+  cv::Mat see_through_rim;              // the rims of the holes SGBM sees into (empty: none)
   if (sgbm) {
     cv::Mat stereo = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
     // Stereo runs with the left camera of the pair first; when that is keyframe 2, its points are
@@ -469,10 +533,16 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     result.method = "rectified SGBM";
     // All of it: what is dropped below stays empty (unless sweep_sgbm_rejects: the sweep retries).
     stereo.copyTo(result.stereo_depth);
+    see_through_rim = SeeThroughRim(key1, holes, stereo, options);
     DropNearSideWithinHoles(key1.hole_mask, options.hole_edge_margin_near_px, options.edge_jump,
                             &stereo);
+    if (!see_through_rim.empty())
+      DropNearSideWithinHoles(key1.hole_mask, options.see_through_margin_px, options.edge_jump,
+                              &stereo, see_through_rim);
     agrees =
         ValidateAndFill(stereo, key1, holes, photometric, options, &result, &errors, &errors_m);
+    if (!see_through_rim.empty())
+      KeepRimsOfFilledHoles(holes, result.fill_mask, options.min_ring_samples, &see_through_rim);
   }
   // Plane sweep: for forward pairs (rectification degenerates) or when asked for every pair, over
   // the holes and a validation ring around them; after SGBM (plane_sweep_after_sgbm), over the
@@ -485,6 +555,8 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     // depth instead of the background behind it (sweep_sgbm_rejects).
     if (sgbm)
       wanted &= options.sweep_sgbm_rejects ? result.fill_mask == 0 : result.stereo_depth == 0.f;
+    // The rims of the holes SGBM sees into: the sweep's windows there match the glass's edge.
+    if (!see_through_rim.empty()) wanted &= see_through_rim == 0;
     // Projector shadows lie at depth discontinuities by definition, where the sweep's windows
     // carry the front surface's depth into the hole: left to SGBM unless asked for.
     if (!options.sweep_shadows) wanted &= key1.hole_mask != static_cast<uint8_t>(HoleCode::kShadow);

@@ -81,6 +81,16 @@ struct StereoFillOptions {
   // 82 -> 32 pixels, synthetic seed 5 fill 86.4 -> 85.8%; 5 px: 24, 84.4%. Not for the sweep's
   // depth (no gain: 82 -> 81).
   int hole_edge_margin_near_px = 4;
+  // A hole that SGBM sees into: its median SGBM depth is at least (1 + see_through_ratio) times
+  // the median sensor depth in its validation ring, so no object stands out in front of what
+  // surrounds it: clear glass with the background behind it (or a patch of a surface). Its rim, the
+  // pixels within see_through_rim_px of its border (0: off), is where both window matchers take
+  // the depth of the glass's edge or of a label on it; there only SGBM's depth fills, and only
+  // without a farther SGBM depth on a hole pixel within see_through_margin_px (not 4); the sweep
+  // leaves the rim alone. A glossy or dark object stands in front of its ring and is not touched.
+  double see_through_ratio = -0.03;
+  int see_through_rim_px = 5;
+  int see_through_margin_px = 8;
   // Photometric check in a third keyframe (when one is given). A hole pixel's patch uses keyframe
   // 1's hole pixels only (photometric_hole_patches), so that a measured surface beside the hole
   // (a label above clear glass) cannot make it match at that surface's depth. Patch 7 -> 15 with
