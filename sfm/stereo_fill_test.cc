@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <string>
 
 #include "acquisition/depth.h"
 #include "datasets/synth.h"
@@ -73,14 +74,26 @@ FillScore Score(const Rendered& a, const StereoFillResult& r) {
   return f;
 }
 
-TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
+// Keyframe 1, keyframe 2 and a third view: frames i1, i2 and i3 of a 30-frame synthetic capture.
+struct RenderedTriple {
+  Rendered a, b, c;
+  SE3 key1_from_key2, key1_from_key3;
+  ThirdView Third() const { return {&c.frame, key1_from_key3}; }
+};
+
+RenderedTriple RenderTriple(const std::string& scene_name, uint32_t seed, int i1, int i2, int i3) {
   synth::SynthOptions options;
   options.frames = 30;
-  const synth::Scene scene = synth::Scene::Make("glass-table", 5);
+  const synth::Scene scene = synth::Scene::Make(scene_name, seed);
   const std::vector<SE3> poses = synth::MakeTrajectory(scene, options);
-  const Rendered a = Render(scene, poses[10], 10), b = Render(scene, poses[16], 16),
-                 c = Render(scene, poses[4], 4);
-  const SE3 key1_from_key2 = poses[10].Inverse() * poses[16];
+  return {Render(scene, poses[i1], i1), Render(scene, poses[i2], i2), Render(scene, poses[i3], i3),
+          poses[i1].Inverse() * poses[i2], poses[i1].Inverse() * poses[i3]};
+}
+
+TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
+  const RenderedTriple t = RenderTriple("glass-table", 5, 10, 16, 4);
+  const Rendered &a = t.a, &b = t.b;
+  const SE3& key1_from_key2 = t.key1_from_key2;
   const Camera camera = synth::SynthCamera();
 
   // Rectified SGBM alone.
@@ -116,7 +129,7 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   // holes SGBM left empty, projector shadows apart. On this pair those are nearly all shadows (63
   // pixels are not, since shadows are continued down the bottle's glass), so it fills as much as
   // SGBM alone with the same third view; told to sweep the shadows as well, it fills more.
-  const ThirdView third{&c.frame, poses[10].Inverse() * poses[4]};
+  const ThirdView third = t.Third();
   const StereoFillResult r3 =
       FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, sgbm_only, third);
   const auto start = std::chrono::steady_clock::now();
@@ -169,14 +182,10 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
 // depth is not nearer than its ring's), and on its rim only SGBM's depth without a farther one
 // within 8 px fills.
 TEST(FillHolesByStereo, KeepsTheGlassEdgesDepthOffClearGlassOnTheShelf) {
-  synth::SynthOptions options;
-  options.frames = 30;
-  const synth::Scene scene = synth::Scene::Make("shelf", 1);
-  const std::vector<SE3> poses = synth::MakeTrajectory(scene, options);
-  const Rendered a = Render(scene, poses[10], 10), b = Render(scene, poses[16], 16),
-                 c = Render(scene, poses[6], 6);
-  const SE3 key1_from_key2 = poses[10].Inverse() * poses[16];
-  const ThirdView third{&c.frame, poses[10].Inverse() * poses[6]};
+  const RenderedTriple t = RenderTriple("shelf", 1, 10, 16, 6);
+  const Rendered &a = t.a, &b = t.b;
+  const SE3& key1_from_key2 = t.key1_from_key2;
+  const ThirdView third = t.Third();
   const Camera camera = synth::SynthCamera();
   StereoFillOptions no_rim;
   no_rim.see_through_rim_px = 0;
