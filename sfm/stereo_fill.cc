@@ -244,8 +244,9 @@ cv::Mat SeeThroughRim(const RgbdFrame& key1, const Holes& holes, const cv::Mat& 
   // A hole that reaches the image's edge is not seen whole (ICL-NUIM's invalid border frame is
   // one): what SGBM sees in it is the scene going on out of view.
   std::vector<uint8_t> at_edge(holes.count, 0);
+  const int last_column = std::max(1, stereo.cols - 1);  // the step from the first to the last
   for (int y = 0; y < stereo.rows; ++y)
-    for (int x = 0; x < stereo.cols; x += (y == 0 || y == stereo.rows - 1) ? 1 : stereo.cols - 1)
+    for (int x = 0; x < stereo.cols; x += (y == 0 || y == stereo.rows - 1) ? 1 : last_column)
       if (key1.hole_mask.at<uint8_t>(y, x)) at_edge[holes.labels.at<int>(y, x)] = 1;
   std::vector<uint8_t> sees_through(holes.count, 0);
   bool any = false;

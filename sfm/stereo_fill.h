@@ -4,7 +4,8 @@
 //
 // Steps: check the pair (baseline; epipole inside the image, i.e. mostly forward motion, goes to
 // the plane sweep of sfm/plane_sweep.h over the holes instead, with the third view when given;
-// after SGBM, the sweep also covers the holes SGBM found no depth for, validated separately),
+// after SGBM, the sweep also covers the holes SGBM found no depth for, validated separately,
+// except the rims of the holes SGBM sees into, clear glass's above all),
 // rectify both colour images (cv::stereoRectify) with the pair's left camera first
 // (a mostly vertical baseline is transposed into a horizontal one), compute disparity with
 // cv::StereoSGBM over the disparities of keyframe 1's measured depth range, keeping pixels whose
@@ -87,7 +88,10 @@ struct StereoFillOptions {
   // pixels within see_through_rim_px of its border (0: off), is where both window matchers take
   // the depth of the glass's edge or of a label on it; there only SGBM's depth fills, and only
   // without a farther SGBM depth on a hole pixel within see_through_margin_px (not 4); the sweep
-  // leaves the rim alone. A glossy or dark object stands in front of its ring and is not touched.
+  // leaves the rim alone once SGBM's validated depth fills that hole. A glossy or dark object
+  // stands in front of its ring and is not touched; holes that reach the image's edge are left
+  // out. Demo: clear glass at the glass's depth 31 -> 0 pixels, clear-glass fill 77.7 -> 73.5%;
+  // shelf scene 121 -> 2, fill 70.4 -> 69.3%; ICL and punched TUM unchanged.
   double see_through_ratio = -0.03;
   int see_through_rim_px = 5;
   int see_through_margin_px = 8;
