@@ -6,6 +6,7 @@
 #include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
@@ -253,7 +254,8 @@ cv::Mat SeeThroughRim(const RgbdFrame& key1, const Holes& holes, const cv::Mat& 
   const size_t enough = static_cast<size_t>(options.min_ring_samples);
   for (size_t i = 0; i < holes.count; ++i) {
     if (at_edge[i] || inside[i].size() < enough || ring[i].size() < enough) continue;
-    sees_through[i] = Median(inside[i]) > (1.0 + options.see_through_ratio) * Median(ring[i]);
+    sees_through[i] = Median(std::move(inside[i])) >
+                      (1.0 + options.see_through_ratio) * Median(std::move(ring[i]));
     any |= sees_through[i] != 0;
   }
   if (!any) return {};

@@ -87,11 +87,12 @@ struct StereoFillOptions {
   // surrounds it: clear glass with the background behind it (or a patch of a surface). Its rim, the
   // pixels within see_through_rim_px of its border (0: off), is where both window matchers take
   // the depth of the glass's edge or of a label on it; there only SGBM's depth fills, and only
-  // without a farther SGBM depth on a hole pixel within see_through_margin_px (not 4); the sweep
-  // leaves the rim alone once SGBM's validated depth fills that hole. A glossy or dark object
-  // stands in front of its ring and is not touched; holes that reach the image's edge are left
-  // out. Demo: clear glass at the glass's depth 31 -> 0 pixels, clear-glass fill 77.7 -> 73.5%;
-  // shelf scene 121 -> 2, fill 70.4 -> 69.3%; ICL and punched TUM unchanged.
+  // without a farther SGBM depth on a hole pixel within see_through_margin_px (instead of
+  // hole_edge_margin_near_px); the sweep leaves the rim alone once SGBM's validated depth fills
+  // that hole. A glossy or dark object stands in front of its ring and is not touched; holes that
+  // reach the image's edge are left out. Demo: clear glass at the glass's depth 31 -> 0 pixels,
+  // clear-glass fill 77.7 -> 73.5%; shelf scene 121 -> 2, fill 70.4 -> 69.3%; ICL and punched TUM
+  // unchanged.
   double see_through_ratio = -0.03;
   int see_through_rim_px = 5;
   int see_through_margin_px = 8;
