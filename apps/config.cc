@@ -39,8 +39,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(
     max_lr_difference_px, min_depth_m, max_depth_m, ring_px, min_ring_samples, ring_cell_px,
     max_ring_error, ring_scale_correction, max_ring_scale, max_pair_error, edge_margin_px,
     edge_margin_near_px, edge_jump, hole_edge_margin_near_px, see_through_ratio, see_through_rim_px,
-    see_through_margin_px, photometric_patch_px, photometric_hole_patches, min_ncc, min_patch_std,
-    max_mean_difference, occlusion_margin)
+    see_through_margin_px, see_through_sensor_px, see_through_sensor_step, photometric_patch_px,
+    photometric_hole_patches, min_ncc, min_patch_std, max_mean_difference, occlusion_margin)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing, agreement,
                                    correct_own_fills)
 

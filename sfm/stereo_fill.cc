@@ -186,26 +186,35 @@ Holes FindHoles(const cv::Mat& hole_mask) {
 // farther one within margin_near_px (the near side of a discontinuity) or a nearer one within
 // margin_far_px, a discontinuity being a relative step over `jump`. Max/min filters over the
 // window, so that a gap in the stereo (pixels the left-right check dropped) does not hide it.
-cv::Mat WithoutEdgeMargins(const cv::Mat& stereo_in, int margin_far_px, int margin_near_px,
+cv::Mat WithoutEdgeMargins(const cv::Mat& stereo, int margin_far_px, int margin_near_px,
                            double jump) {
-  cv::Mat stereo = stereo_in.clone();
-  if (margin_far_px <= 0 && margin_near_px <= 0) return stereo;
+  if (margin_far_px <= 0 && margin_near_px <= 0) return stereo.clone();
   auto square = [](int r) {
     return cv::getStructuringElement(cv::MORPH_RECT, {2 * r + 1, 2 * r + 1});
   };
-  cv::Mat farthest, nearest = stereo.clone();
-  nearest.setTo(std::numeric_limits<float>::max(), stereo <= 0.f);
-  cv::dilate(stereo, farthest, square(margin_near_px));
-  cv::erode(nearest, nearest, square(margin_far_px));
+  // A margin of 0 compares each depth with itself, which never drops it.
+  cv::Mat farthest, nearest;
+  if (margin_near_px > 0)
+    cv::dilate(stereo, farthest, square(margin_near_px));
+  else
+    farthest = stereo;
+  if (margin_far_px > 0) {
+    nearest = stereo.clone();
+    nearest.setTo(std::numeric_limits<float>::max(), stereo <= 0.f);
+    cv::erode(nearest, nearest, square(margin_far_px));
+  } else {
+    nearest = stereo;
+  }
   const float up = static_cast<float>(1.0 + jump), down = static_cast<float>(1.0 - jump);
+  cv::Mat kept = stereo.clone();
   for (int y = 0; y < stereo.rows; ++y) {
-    float* s = stereo.ptr<float>(y);
+    float* k = kept.ptr<float>(y);
     const float* f = farthest.ptr<float>(y);
     const float* n = nearest.ptr<float>(y);
     for (int x = 0; x < stereo.cols; ++x)
-      if (f[x] > s[x] * up || n[x] < s[x] * down) s[x] = 0.f;
+      if (f[x] > k[x] * up || n[x] < k[x] * down) k[x] = 0.f;
   }
-  return stereo;
+  return kept;
 }
 
 // Clear glass's rim is a colour edge at the glass's depth, and block matching spreads that depth
@@ -225,49 +234,24 @@ void DropNearSideWithinHoles(const cv::Mat& hole_mask, int margin_px, double jum
   stereo->setTo(0.f, dropped);
 }
 
-// The rims of the holes that SGBM sees into (StereoFillOptions::see_through_ratio): CV_8U, 255 on
-// the hole pixels within see_through_rim_px of the border of a hole whose median SGBM depth
-// (`stereo` on its pixels) is at least (1 + see_through_ratio) times the median sensor depth in
-// its validation ring. Empty when no hole qualifies.
-cv::Mat SeeThroughRim(const RgbdFrame& key1, const Holes& holes, const cv::Mat& stereo,
-                      const StereoFillOptions& options) {
-  if (options.see_through_rim_px <= 0) return {};
-  std::vector<std::vector<float>> inside(holes.count), ring(holes.count);
-  for (int y = 0; y < stereo.rows; ++y)
-    for (int x = 0; x < stereo.cols; ++x) {
-      const int label = holes.labels.at<int>(y, x);
-      if (key1.hole_mask.at<uint8_t>(y, x)) {
-        if (const float s = stereo.at<float>(y, x); s > 0) inside[label].push_back(s);
-      } else if (holes.distance.at<float>(y, x) <= options.ring_px) {
-        if (const float k = key1.depth.at<float>(y, x); k > 0) ring[label].push_back(k);
-      }
-    }
-  // A hole that reaches the image's edge is not seen whole (ICL-NUIM's invalid border frame is
-  // one): what SGBM sees in it is the scene going on out of view.
-  std::vector<uint8_t> at_edge(holes.count, 0);
-  const int last_column = std::max(1, stereo.cols - 1);  // the step from the first to the last
-  for (int y = 0; y < stereo.rows; ++y)
-    for (int x = 0; x < stereo.cols; x += (y == 0 || y == stereo.rows - 1) ? 1 : last_column)
-      if (key1.hole_mask.at<uint8_t>(y, x)) at_edge[holes.labels.at<int>(y, x)] = 1;
-  std::vector<uint8_t> sees_through(holes.count, 0);
-  bool any = false;
-  const size_t enough = static_cast<size_t>(options.min_ring_samples);
-  for (size_t i = 0; i < holes.count; ++i) {
-    if (at_edge[i] || inside[i].size() < enough || ring[i].size() < enough) continue;
-    sees_through[i] = Median(std::move(inside[i])) >
-                      (1.0 + options.see_through_ratio) * Median(std::move(ring[i]));
-    any |= sees_through[i] != 0;
-  }
-  if (!any) return {};
-  cv::Mat inner;  // distance to the nearest measured pixel
-  cv::distanceTransform(key1.hole_mask, inner, cv::DIST_L2, 3);
-  cv::Mat rim = cv::Mat::zeros(stereo.size(), CV_8UC1);
-  for (int y = 0; y < rim.rows; ++y)
+// Drops, in place, the stereo depth on the rim pixels (`rim`, CV_8U) that is nearer, by more than
+// see_through_sensor_step, than the farthest sensor depth within see_through_sensor_px: the
+// glass's edge, matched in front of the background that the sensor measures beside the glass.
+void DropNearerThanSensorBeside(const RgbdFrame& key1, const cv::Mat& rim,
+                                const StereoFillOptions& options, cv::Mat* stereo) {
+  if (options.see_through_sensor_px <= 0) return;
+  cv::Mat farthest = key1.depth.clone();
+  farthest.setTo(0.f, key1.hole_mask != 0);
+  const int side = 2 * options.see_through_sensor_px + 1;
+  cv::dilate(farthest, farthest, cv::getStructuringElement(cv::MORPH_RECT, {side, side}));
+  const float up = static_cast<float>(1.0 + options.see_through_sensor_step);
+  for (int y = 0; y < rim.rows; ++y) {
+    const uint8_t* r = rim.ptr<uint8_t>(y);
+    const float* f = farthest.ptr<float>(y);
+    float* s = stereo->ptr<float>(y);
     for (int x = 0; x < rim.cols; ++x)
-      if (key1.hole_mask.at<uint8_t>(y, x) && sees_through[holes.labels.at<int>(y, x)] &&
-          inner.at<float>(y, x) <= options.see_through_rim_px)
-        rim.at<uint8_t>(y, x) = 255;
-  return rim;
+      if (r[x] && s[x] > 0 && s[x] * up < f[x]) s[x] = 0.f;
+  }
 }
 
 // Keeps, in place, the rim pixels of the holes where SGBM's validated depth filled at least
@@ -434,9 +418,11 @@ bool StereoFillOptions::Check(std::string* message) const {
   if (edge_margin_px < 0 || edge_margin_near_px < 0 || hole_edge_margin_near_px < 0 ||
       !(edge_jump > 0))
     return fail("edge margins must be >= 0 and edge_jump positive");
-  if (!(see_through_ratio > -1) || see_through_rim_px < 0 || see_through_margin_px < 0)
+  if (!(see_through_ratio > -1) || see_through_rim_px < 0 || see_through_margin_px < 0 ||
+      see_through_sensor_px < 0 || !(see_through_sensor_step >= 0))
     return fail(
-        "see_through_ratio must be > -1, see_through_rim_px and see_through_margin_px >= 0");
+        "see_through_ratio must be > -1; see_through_rim_px, see_through_margin_px, "
+        "see_through_sensor_px and see_through_sensor_step >= 0");
   if (ring_px < 1 || min_ring_samples < 1 || ring_cell_px < 0 || !(max_ring_error > 0) ||
       !(max_pair_error > 0))
     return fail("ring and error thresholds must be positive");
@@ -457,6 +443,70 @@ std::string StereoFillResult::BriefReport() const {
       1000.0 * stereo_error_median_m, rejected_by_ring, rejected_by_shadow,
       third_view_used ? "third view" : "(no third view)", rejected_by_photometry);
   return buffer;
+}
+
+cv::Mat SeeThroughRim(const RgbdFrame& key1, const cv::Mat& stereo,
+                      const StereoFillOptions& options) {
+  if (options.see_through_rim_px <= 0) return {};
+  auto disk = [](int r) {
+    return cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1});
+  };
+  // Holes are judged without the lines of hole pixels one or two pixels wide (3x3 opening), which
+  // join objects that stand apart: a shelf's front edge, seen at a grazing angle, joins a clear
+  // vase's hole to a dark object's, whose depth in front of the ring would then decide for both.
+  const cv::Mat in_hole = key1.hole_mask != 0;
+  cv::Mat whole, labels;
+  cv::morphologyEx(in_hole, whole, cv::MORPH_OPEN, cv::Mat::ones(3, 3, CV_8UC1));
+  const int count = cv::connectedComponents(whole, labels, 8, CV_32S);  // label 0: no hole
+  if (count < 2) return {};
+  // Every pixel within ring_px of a hole takes its label (the largest where two are that near):
+  // the ring's measured pixels, and the hole pixels that the opening took away.
+  cv::Mat near;
+  labels.convertTo(near, CV_32F);
+  cv::dilate(near, near, disk(options.ring_px));
+  std::vector<std::vector<float>> inside(count), ring(count);
+  std::vector<uint8_t> at_edge(count, 0);
+  for (int y = 0; y < stereo.rows; ++y) {
+    const uint8_t* w = whole.ptr<uint8_t>(y);
+    const uint8_t* h = in_hole.ptr<uint8_t>(y);
+    const int* l = labels.ptr<int>(y);
+    const float* n = near.ptr<float>(y);
+    const float* s = stereo.ptr<float>(y);
+    const float* k = key1.depth.ptr<float>(y);
+    const bool edge_row = y == 0 || y == stereo.rows - 1;
+    for (int x = 0; x < stereo.cols; ++x) {
+      if (w[x]) {
+        if (s[x] > 0) inside[l[x]].push_back(s[x]);
+        // A hole that reaches the image's edge is not seen whole (ICL-NUIM's invalid border
+        // frame is one): what SGBM sees in it is the scene going on out of view.
+        if (edge_row || x == 0 || x == stereo.cols - 1) at_edge[l[x]] = 1;
+      } else if (!h[x] && n[x] > 0 && k[x] > 0) {
+        ring[static_cast<int>(n[x])].push_back(k[x]);
+      }
+    }
+  }
+  std::vector<uint8_t> sees_through(count, 0);
+  bool any = false;
+  const size_t enough = static_cast<size_t>(options.min_ring_samples);
+  for (int i = 1; i < count; ++i) {
+    if (at_edge[i] || inside[i].size() < enough || ring[i].size() < enough) continue;
+    sees_through[i] = Median(std::move(inside[i])) >
+                      (1.0 + options.see_through_ratio) * Median(std::move(ring[i]));
+    any |= sees_through[i] != 0;
+  }
+  if (!any) return {};
+  cv::Mat deep;  // hole pixels farther than see_through_rim_px from every measured pixel
+  cv::erode(in_hole, deep, disk(options.see_through_rim_px));
+  cv::Mat rim = cv::Mat::zeros(stereo.size(), CV_8UC1);
+  for (int y = 0; y < rim.rows; ++y) {
+    const uint8_t* h = in_hole.ptr<uint8_t>(y);
+    const uint8_t* d = deep.ptr<uint8_t>(y);
+    const float* n = near.ptr<float>(y);
+    uint8_t* r = rim.ptr<uint8_t>(y);
+    for (int x = 0; x < rim.cols; ++x)
+      if (h[x] && !d[x] && sees_through[static_cast<int>(n[x])]) r[x] = 255;
+  }
+  return rim;
 }
 
 StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
@@ -536,12 +586,14 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     result.method = "rectified SGBM";
     // All of it: what is dropped below stays empty (unless sweep_sgbm_rejects: the sweep retries).
     stereo.copyTo(result.stereo_depth);
-    see_through_rim = SeeThroughRim(key1, holes, stereo, options);
+    see_through_rim = SeeThroughRim(key1, stereo, options);
     DropNearSideWithinHoles(key1.hole_mask, options.hole_edge_margin_near_px, options.edge_jump,
                             &stereo);
-    if (!see_through_rim.empty())
+    if (!see_through_rim.empty()) {
       DropNearSideWithinHoles(key1.hole_mask, options.see_through_margin_px, options.edge_jump,
                               &stereo, see_through_rim);
+      DropNearerThanSensorBeside(key1, see_through_rim, options, &stereo);
+    }
     agrees =
         ValidateAndFill(stereo, key1, holes, photometric, options, &result, &errors, &errors_m);
     if (!see_through_rim.empty())

@@ -83,19 +83,23 @@ struct StereoFillOptions {
   // depth (no gain: 82 -> 81).
   int hole_edge_margin_near_px = 4;
   // A hole that SGBM sees into: its median SGBM depth is at least (1 + see_through_ratio) times
-  // the median sensor depth in its validation ring, so no object stands out in front of what
-  // surrounds it: clear glass with the background behind it (or a patch of a surface). Its rim, the
-  // pixels within see_through_rim_px of its border (0: off), is where both window matchers take
-  // the depth of the glass's edge or of a label on it; there only SGBM's depth fills, and only
+  // the median sensor depth in its ring, so no object stands out in front of what surrounds it:
+  // clear glass with the background behind it (or a patch of a surface). Its rim, the pixels
+  // within see_through_rim_px of its border (0: off), is where both window matchers take the
+  // depth of the glass's edge or of a label on it; there only SGBM's depth fills, and only
   // without a farther SGBM depth on a hole pixel within see_through_margin_px (instead of
-  // hole_edge_margin_near_px); the sweep leaves the rim alone once SGBM's validated depth fills
-  // that hole. A glossy or dark object stands in front of its ring and is not touched; holes that
-  // reach the image's edge are left out. Demo: clear glass at the glass's depth 31 -> 0 pixels,
-  // clear-glass fill 77.7 -> 73.5%; shelf scene 121 -> 2, fill 70.4 -> 69.3%; ICL and punched TUM
-  // unchanged.
+  // hole_edge_margin_near_px) and without a sensor depth more than see_through_sensor_step
+  // farther within see_through_sensor_px (0: no such test): the background measured beside the
+  // glass; the sweep leaves the rim alone once SGBM's validated depth fills that hole. A glossy or
+  // dark object stands in front of its ring and is not touched; holes that reach the image's edge
+  // are left out, and lines of hole pixels one or two wide do not join holes (SeeThroughRim).
+  // Demo: clear glass at the glass's depth 31 -> 0 pixels, clear-glass fill 77.7 -> 73.0%; shelf
+  // scene, seeds 1-5: 49-121 -> 0, fill 70.4 -> 69.0% (seed 1); ICL and punched TUM unchanged.
   double see_through_ratio = -0.03;
   int see_through_rim_px = 5;
   int see_through_margin_px = 8;
+  int see_through_sensor_px = 3;
+  double see_through_sensor_step = 0.03;
   // Photometric check in a third keyframe (when one is given). A hole pixel's patch uses keyframe
   // 1's hole pixels only (photometric_hole_patches), so that a measured surface beside the hole
   // (a label above clear glass) cannot make it match at that surface's depth. Patch 7 -> 15 with
@@ -149,6 +153,15 @@ bool EpipoleInsideImage(const Camera& camera, const SE3& a_from_b, double margin
 // A forward pair: the epipole lies inside (or within margin_px of) either keyframe's image, so
 // rectified stereo cannot serve it (EpipoleInsideImage both ways round).
 bool IsForwardPair(const Camera& camera, const SE3& key1_from_key2, double margin_px);
+
+// The rims of the holes that stereo sees into, as FillHolesByStereo finds them
+// (StereoFillOptions::see_through_ratio): CV_8U, 255 on the hole pixels within see_through_rim_px
+// of a measured pixel, in the holes whose median stereo depth (`stereo`, CV_32F on key1's pixels,
+// 0 = none) is at least (1 + see_through_ratio) times the median sensor depth on the measured
+// pixels within ring_px of them. Holes that reach the image's edge are left out, and lines of
+// hole pixels one or two pixels wide do not join holes. Empty when no hole qualifies.
+cv::Mat SeeThroughRim(const RgbdFrame& key1, const cv::Mat& stereo,
+                      const StereoFillOptions& options);
 
 // key1/key2: colour (BGR) and metric depth with hole masks; key1_from_key2 maps points from
 // keyframe 2's camera into keyframe 1's. Both frames use `camera`.
