@@ -179,8 +179,8 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
 // The shelf's clear vases stand a few centimetres before the shelf's back, so the glass's own
 // depth and the background's seen through it differ by about 5%: the window matchers carry the
 // depth of the vase's edge a few pixels into the glass. The vase's hole is one SGBM sees into (its
-// depth is not nearer than its ring's), and on its rim only SGBM's depth without a farther one
-// within 8 px fills.
+// depth is not nearer than its ring's), and on its rim only SGBM's depth fills that has neither a
+// farther SGBM depth in the hole within 8 px nor a sensor depth more than 3% farther within 3 px.
 TEST(FillHolesByStereo, KeepsTheGlassEdgesDepthOffClearGlassOnTheShelf) {
   const Camera camera = synth::SynthCamera();
   StereoFillOptions no_rim, no_sensor_test;
