@@ -7,7 +7,7 @@
 # fills were carried from earlier keyframes, 342 of 14509 when the sweep also retries SGBM's
 # rejected pixels, 522 of 16423 with whole 7 px patches in the third-view check, 1187 of 17013
 # before hole windows). Measured fill
-# (good): glossy 91% (90%), dark 89% (86%), textured glass 85% (85%), clear glass 74% (71%).
+# (good): glossy 91% (90%), dark 89% (86%), textured glass 85% (85%), clear glass 73% (71%).
 set(work "${CMAKE_CURRENT_BINARY_DIR}/cli_demo_glass_tmp")
 file(REMOVE_RECURSE "${work}")
 execute_process(COMMAND "${GLASSFUSION}" demo --out "${work}" --data "${work}/no-datasets"
