@@ -111,14 +111,16 @@ void ApplyConfig(const std::string& text, const std::string& path, TrackerOption
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path, std::string("bad setting: ") + e.what());
   }
+  // In order, stopping at the first refusal: its message is the one reported.
   std::string problem;
-  for (const auto& [name, ok] : std::initializer_list<std::pair<const char*, bool>>{
-           {"tracker", t.Check(&problem)},
-           {"fill.pairs", f.pairs.Check(&problem)},
-           {"fill.stereo", f.stereo.Check(&problem)},
-           {"fill.carry", f.carry.Check(&problem)},
-           {"fill", f.Check(&problem)}})
-    if (!ok) throw InputError(path, std::string("settings refused (") + name + "): " + problem);
+  auto refuse = [&](const char* name) {
+    throw InputError(path, std::string("settings refused (") + name + "): " + problem);
+  };
+  if (!t.Check(&problem)) refuse("tracker");
+  if (!f.pairs.Check(&problem)) refuse("fill.pairs");
+  if (!f.stereo.Check(&problem)) refuse("fill.stereo");
+  if (!f.carry.Check(&problem)) refuse("fill.carry");
+  if (!f.Check(&problem)) refuse("fill");
   *tracker = t;
   *fill_options = f;
 }

@@ -88,6 +88,10 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
   // Values of the right kind that the options' Check() refuses.
   EXPECT_EQ(Problem(R"({"fill": {"stereo": {"block_size": 4}}})", &options),
             "settings refused (fill.stereo): block_size must be odd");
+  // Two refusals: the first one's stage and message (the fill stage's own check, which also
+  // refuses this search range, comes after the stereo's).
+  EXPECT_EQ(Problem(R"({"fill": {"stereo": {"block_size": 4, "num_disparities": 16}}})", &options),
+            "settings refused (fill.stereo): block_size must be odd");
   EXPECT_EQ(Problem(R"({"fill": {"pairs": {"epipole_margin_px": 60}}})", &options),
             "settings refused (fill): pairs.epipole_margin_px and stereo.epipole_margin_px must "
             "be equal");
