@@ -46,11 +46,14 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing
 
 namespace {
 
-nlohmann::json FillToJson(const FillStageOptions& o) {
-  return {{"queue_capacity", o.queue_capacity},
-          {"pairs", o.pairs},
-          {"stereo", o.stereo},
-          {"carry", o.carry}};
+// Every setting, as a config file gives them (keys sorted).
+nlohmann::json SettingsTree(const TrackerOptions& tracker, const FillStageOptions& fill) {
+  return {{"tracker", tracker},
+          {"fill",
+           {{"queue_capacity", fill.queue_capacity},
+            {"pairs", fill.pairs},
+            {"stereo", fill.stereo},
+            {"carry", fill.carry}}}};
 }
 
 // Checks `given` (the file's tree) against `known` (every setting, current values): same keys,
@@ -84,8 +87,7 @@ void CheckAgainst(const nlohmann::json& given, const nlohmann::json& known,
 
 nlohmann::ordered_json SettingsToJson(const TrackerOptions& tracker, const FillStageOptions& fill) {
   // Through nlohmann::json (keys sorted) into an ordered_json for report.json.
-  const nlohmann::json settings = {{"tracker", tracker}, {"fill", FillToJson(fill)}};
-  return nlohmann::ordered_json::parse(settings.dump());
+  return nlohmann::ordered_json::parse(SettingsTree(tracker, fill).dump());
 }
 
 void ApplyConfig(const std::string& text, const std::string& path, TrackerOptions* tracker,
@@ -96,7 +98,7 @@ void ApplyConfig(const std::string& text, const std::string& path, TrackerOption
   } catch (const nlohmann::json::parse_error& e) {
     throw InputError(path, std::string("not valid JSON: ") + e.what());
   }
-  nlohmann::json merged = {{"tracker", *tracker}, {"fill", FillToJson(*fill_options)}};
+  nlohmann::json merged = SettingsTree(*tracker, *fill_options);
   CheckAgainst(given, merged, "", path);
   merged.merge_patch(given);
   TrackerOptions t = *tracker;
