@@ -13,6 +13,7 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
+#include <optional>
 #include <thread>
 
 #include "acquisition/errors.h"
@@ -64,33 +65,22 @@ Eigen::Matrix4d ToEigen(const cv::Mat& m) {
   return e;
 }
 
-// OpenCV's StereoSGBM alone on a rectified pair (the dense-stereo step without our range, checks
-// and validation): the full num_disparities from 0 and the other SGBM and rectification settings
-// of `o`, ours. Returns milliseconds.
-double TimeOpenCvSgbm(const RgbdFrame& a, const RgbdFrame& b, const Camera& camera,
-                      const SE3& b_from_a, const StereoFillOptions& o) {
+// OpenCV's StereoSGBM alone on the pair as our fill rectified it (the dense-stereo step without
+// our range, checks and validation): the full num_disparities from 0 and the other SGBM settings
+// of `o`. Milliseconds, or nothing when such a search does not fit the rectified image.
+std::optional<double> TimeOpenCvSgbm(const RgbdFrame& key1, const RgbdFrame& key2,
+                                     const Camera& camera, const SgbmRectification& rect,
+                                     const SgbmOptions& o) {
   const auto t0 = Clock::now();
-  cv::Mat r, t, r1, r2, p1, p2, q;
-  cv::eigen2cv(b_from_a.RotationMatrix(), r);
-  cv::eigen2cv(Eigen::Vector3d(b_from_a.translation()), t);
-  const cv::Size size(camera.width, camera.height);
-  cv::stereoRectify(camera.CvK(), camera.CvDistortion(), camera.CvK(), camera.CvDistortion(), size,
-                    r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, o.rectify_alpha, size);
-  cv::Mat gray_a, gray_b, map_x, map_y, rect_a, rect_b, disparity;
-  cv::cvtColor(a.color, gray_a, cv::COLOR_BGR2GRAY);
-  cv::cvtColor(b.color, gray_b, cv::COLOR_BGR2GRAY);
-  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r1, p1, size, CV_16SC2, map_x,
-                              map_y);
-  cv::remap(gray_a, rect_a, map_x, map_y, cv::INTER_LINEAR);
-  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r2, p2, size, CV_16SC2, map_x,
-                              map_y);
-  cv::remap(gray_b, rect_b, map_x, map_y, cv::INTER_LINEAR);
+  const RectifiedImages images = RectifyImages(rect, key1, key2, camera);
   const int bs = o.block_size;
+  if (!SgbmParametersFit(images.left.cols, images.left.rows, 0, o.num_disparities, bs)) return {};
+  cv::Mat disparity;
   cv::StereoSGBM::create(0, o.num_disparities, bs, 8 * bs * bs, 32 * bs * bs,
                          static_cast<int>(std::lround(o.max_lr_difference_px)), 63,
                          o.uniqueness_ratio, o.speckle_window, o.speckle_range,
                          cv::StereoSGBM::MODE_SGBM_3WAY)
-      ->compute(rect_a, rect_b, disparity);
+      ->compute(images.left, images.right, disparity);
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
@@ -130,9 +120,11 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
     filled += r.filled_pixels;
     carry(*job.key1, &r);
     ++methods[r.method.empty() ? r.termination : r.method];
-    if (!IsForwardPair(camera, key1_from_key2, options.fill.stereo.epipole_margin_px))
-      sgbm_ms.push_back(TimeOpenCvSgbm(job.key1->frame, job.key2->frame, camera,
-                                       key1_from_key2.Inverse(), options.fill.stereo));
+    if (r.rectification.usable) {
+      const std::optional<double> ms = TimeOpenCvSgbm(job.key1->frame, job.key2->frame, camera,
+                                                      r.rectification, options.fill.stereo.sgbm);
+      if (ms) sgbm_ms.push_back(*ms);
+    }
   };
   const int keyframes =
       (static_cast<int>(frames.size()) + options.fill_every - 1) / options.fill_every;

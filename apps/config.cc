@@ -32,15 +32,17 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PlaneSweepOptions, window_px, max_planes, max
                                    min_uniqueness, min_parallax_px, min_texture, min_window_inside,
                                    smooth_small, smooth_large, downscale, textureless_cost,
                                    hole_windows)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SgbmOptions, num_disparities, rectify_alpha, min_valid_fraction,
+                                   block_size, uniqueness_ratio, speckle_window, speckle_range,
+                                   max_lr_difference_px)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(
     StereoFillOptions, min_baseline_m, epipole_margin_px, plane_sweep_forward, plane_sweep_always,
-    plane_sweep_after_sgbm, sweep_sgbm_rejects, sweep_shadows, plane_sweep, num_disparities,
-    rectify_alpha, block_size, uniqueness_ratio, speckle_window, speckle_range,
-    max_lr_difference_px, min_depth_m, max_depth_m, ring_px, min_ring_samples, ring_cell_px,
-    max_ring_error, ring_scale_correction, max_ring_scale, max_pair_error, edge_margin_px,
-    edge_margin_near_px, edge_jump, hole_edge_margin_near_px, see_through_ratio, see_through_rim_px,
-    see_through_margin_px, see_through_sensor_px, see_through_sensor_step, photometric_patch_px,
-    photometric_hole_patches, min_ncc, min_patch_std, max_mean_difference, occlusion_margin)
+    plane_sweep_after_sgbm, sweep_sgbm_rejects, sweep_shadows, plane_sweep, sgbm, min_depth_m,
+    max_depth_m, ring_px, min_ring_samples, ring_cell_px, max_ring_error, ring_scale_correction,
+    max_ring_scale, max_pair_error, edge_margin_px, edge_margin_near_px, edge_jump,
+    hole_edge_margin_near_px, see_through_ratio, see_through_rim_px, see_through_margin_px,
+    see_through_sensor_px, see_through_sensor_step, photometric_patch_px, photometric_hole_patches,
+    min_ncc, min_patch_std, max_mean_difference, occlusion_margin)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing, agreement,
                                    correct_own_fills)
 

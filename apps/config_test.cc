@@ -29,7 +29,7 @@ TEST(Config, SettingsListEveryStageWithItsValues) {
   EXPECT_EQ(j["tracker"]["keyframes"]["max_translation_m"], 0.02);
   EXPECT_EQ(j["fill"]["pairs"]["min_matches"], 40);
   EXPECT_EQ(j["fill"]["pairs"]["refine"]["photometric"], true);
-  EXPECT_EQ(j["fill"]["stereo"]["block_size"], 5);
+  EXPECT_EQ(j["fill"]["stereo"]["sgbm"]["block_size"], 5);
   EXPECT_EQ(j["fill"]["stereo"]["plane_sweep"]["max_planes"], 64);
   EXPECT_EQ(j["fill"]["carry"]["max_keyframes"], 15);
   EXPECT_EQ(j["fill"]["queue_capacity"], 16);
@@ -39,19 +39,19 @@ TEST(Config, OverridesWhatTheFileSetsAndKeepsTheRest) {
   ReconstructOptions options;
   options.fill_options.stereo.plane_sweep_always = true;  // e.g. --sweep-all, not in the file
   EXPECT_EQ(Problem(R"({"tracker": {"icp": {"iterations": [8, 4]}, "pyramid_levels": 2},
-                        "fill": {"stereo": {"block_size": 7, "min_ncc": 1,
+                        "fill": {"stereo": {"sgbm": {"block_size": 7}, "min_ncc": 1,
                                             "plane_sweep": {"hole_windows": false}},
                                  "carry": {"agreement": 0.01}}})",
                     &options),
             "");
   EXPECT_EQ(options.tracker.icp.iterations, (std::vector<int>{8, 4}));
   EXPECT_EQ(options.tracker.pyramid_levels, 2);
-  EXPECT_EQ(options.fill_options.stereo.block_size, 7);
+  EXPECT_EQ(options.fill_options.stereo.sgbm.block_size, 7);
   EXPECT_EQ(options.fill_options.stereo.min_ncc, 1.0);  // an integer is a fine number
   EXPECT_FALSE(options.fill_options.stereo.plane_sweep.hole_windows);
   EXPECT_EQ(options.fill_options.carry.agreement, 0.01);
   EXPECT_TRUE(options.fill_options.stereo.plane_sweep_always);
-  EXPECT_EQ(options.fill_options.stereo.num_disparities, 128);
+  EXPECT_EQ(options.fill_options.stereo.sgbm.num_disparities, 128);
   EXPECT_EQ(options.tracker.icp.max_distance_m, 0.08);
 }
 
@@ -71,8 +71,8 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
   const auto before = SettingsToJson(options.tracker, options.fill_options);
   EXPECT_EQ(Problem(R"({"fill": {"stereo": {"blok_size": 5}}})", &options),
             "unknown setting 'fill.stereo.blok_size'");
-  EXPECT_EQ(Problem(R"({"fill": {"stereo": {"block_size": 5.5}}})", &options),
-            "'fill.stereo.block_size' must be an integer");
+  EXPECT_EQ(Problem(R"({"fill": {"stereo": {"sgbm": {"block_size": 5.5}}}})", &options),
+            "'fill.stereo.sgbm.block_size' must be an integer");
   EXPECT_EQ(Problem(R"({"tracker": {"use_features": 1}})", &options),
             "'tracker.use_features' must be true or false");
   EXPECT_EQ(Problem(R"({"fill": {"carry": {"agreement": "2%"}}})", &options),
@@ -86,11 +86,12 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
   EXPECT_EQ(Problem("[1, 2]", &options), "the file must be an object of settings");
   EXPECT_EQ(Problem(R"({"fill": )", &options).rfind("not valid JSON", 0), 0u);
   // Values of the right kind that the options' Check() refuses.
-  EXPECT_EQ(Problem(R"({"fill": {"stereo": {"block_size": 4}}})", &options),
+  EXPECT_EQ(Problem(R"({"fill": {"stereo": {"sgbm": {"block_size": 4}}}})", &options),
             "settings refused (fill.stereo): block_size must be odd");
   // Two refusals: the first one's stage and message (the fill stage's own check, which also
   // refuses this search range, comes after the stereo's).
-  EXPECT_EQ(Problem(R"({"fill": {"stereo": {"block_size": 4, "num_disparities": 16}}})", &options),
+  EXPECT_EQ(Problem(R"({"fill": {"stereo": {"sgbm": {"block_size": 4, "num_disparities": 16}}}})",
+                    &options),
             "settings refused (fill.stereo): block_size must be odd");
   EXPECT_EQ(Problem(R"({"fill": {"pairs": {"epipole_margin_px": 60}}})", &options),
             "settings refused (fill): pairs.epipole_margin_px and stereo.epipole_margin_px must "

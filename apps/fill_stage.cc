@@ -61,8 +61,8 @@ bool FillStageOptions::Check(std::string* message) const {
     if (message) *message = "fill queue_capacity must be positive";
     return false;
   }
-  if (pairs.max_near_disparity_px > stereo.num_disparities) {
-    if (message) *message = "pairs.max_near_disparity_px exceeds the stereo search range";
+  if (pairs.max_near_disparity_px > stereo.sgbm.num_disparities) {
+    if (message) *message = "pairs.max_near_disparity_px exceeds stereo.sgbm.num_disparities";
     return false;
   }
   if (pairs.epipole_margin_px != stereo.epipole_margin_px) {
@@ -100,8 +100,15 @@ bool FillStage::Offer(const RgbdFrame& frame, const SE3& world_from_camera) {
   if (options_.drop_when_busy ? queue_.TryPush({frame, world_from_camera})
                               : queue_.Push({frame, world_from_camera}))
     return true;
-  ++dropped_;
-  spdlog::debug("fill: keyframe {} dropped (stereo worker busy)", frame.timestamp_text);
+  if (stopped_) {
+    ++not_filled_;
+    spdlog::debug("fill: keyframe {} not filled (the fill stage has stopped)",
+                  frame.timestamp_text);
+  } else {
+    ++dropped_;
+    spdlog::debug("fill: keyframe {} dropped (stereo worker busy: {} keyframes queued)",
+                  frame.timestamp_text, options_.queue_capacity);
+  }
   return false;
 }
 
@@ -111,26 +118,39 @@ void FillStage::Finish() {
   if (error_) std::rethrow_exception(error_);
 }
 
+void FillStage::Cancel() {
+  cancelled_ = true;
+  queue_.Close();
+}
+
 void FillStage::Run() {
   try {
     KeyframePairScheduler scheduler(camera_, options_.pairs);
     Offered item;
-    while (queue_.Pop(&item)) {
-      for (const StereoJob& job : scheduler.Add(item.frame, item.world_from_camera)) Process(job);
+    while (!cancelled_ && queue_.Pop(&item)) {
+      std::vector<StereoJob> jobs;
+      try {
+        jobs = scheduler.Add(item.frame, item.world_from_camera);
+      } catch (const std::exception& e) {
+        Skip(item.frame, std::string("features: ") + e.what());
+        continue;
+      }
+      for (const StereoJob& job : jobs) Process(job);
     }
-    for (const StereoJob& job : scheduler.Flush()) Process(job);
+    if (!cancelled_)
+      for (const StereoJob& job : scheduler.Flush()) Process(job);
   } catch (...) {
-    error_ = std::current_exception();
-    queue_.Close();  // later Offer() calls drop their frames
+    error_ = std::current_exception();  // an output that could not be written
   }
+  stopped_ = true;
+  queue_.Close();  // later Offer() calls drop their frames
+  Offered left;
+  while (queue_.Pop(&left)) ++cancelled_left_;
 }
 
-void FillStage::Process(const StereoJob& job) {
-  const auto start = std::chrono::steady_clock::now();
+CarriedFillResult FillStage::Fill(const StereoJob& job, KeyframeFill* k) {
   const RgbdFrame& key1 = job.key1->frame;
-  KeyframeFill k;
-  k.timestamp = key1.timestamp_text;
-  k.hole_pixels = cv::countNonZero(key1.hole_mask);
+  if (!job.error.empty()) throw std::runtime_error(job.error);
   StereoFillResult r;
   if (job.key2) {
     const SE3 key1_from_key2 = job.choice.partner_pose.key1_from_key2;
@@ -139,40 +159,82 @@ void FillStage::Process(const StereoJob& job) {
       third.frame = &job.third->frame;
       third.key1_from_key3 = job.choice.third_pose.key1_from_key2;
     }
-    spdlog::debug("fill {}: {}; {}", k.timestamp, job.choice.BriefReport(),
+    spdlog::debug("fill {}: {}; {}", k->timestamp, job.choice.BriefReport(),
                   job.choice.partner_pose.BriefReport());
     r = FillHolesByStereo(key1, job.key2->frame, camera_, key1_from_key2, options_.stereo, third);
-    k.partner = job.key2->frame.timestamp_text;
-    if (job.third) k.third = job.third->frame.timestamp_text;
-    k.method = r.method;
-    k.baseline_m = job.choice.baseline_m;
-    k.matches = job.choice.matches;
-    k.third_view = r.third_view_used;
-    k.termination = r.termination;
-    k.stereo_error_median_m = r.stereo_error_median_m;
-    spdlog::debug("fill {}: {}", k.timestamp, r.BriefReport());
+    k->partner = job.key2->frame.timestamp_text;
+    if (job.third) k->third = job.third->frame.timestamp_text;
+    k->method = r.method;
+    k->path = r.path;
+    k->sgbm_refused = r.sgbm_refused;
+    k->sgbm_rescaled = r.rectification.usable && r.rectification.rescaled;
+    k->baseline_m = job.choice.baseline_m;
+    k->matches = job.choice.matches;
+    k->third_view = r.third_view_used;
+    k->termination = r.termination;
+    k->stereo_error_median_m = r.stereo_error_median_m;
+    if (!r.rectification.r_left.empty())
+      spdlog::debug("fill {}: {}", k->timestamp, r.rectification.BriefReport());
+    spdlog::debug("fill {}: {}", k->timestamp, r.BriefReport());
   } else {
-    k.termination = job.choice.reason;
-    spdlog::debug("fill {}: {}", k.timestamp, job.choice.BriefReport());
+    k->termination = job.choice.reason;
+    spdlog::debug("fill {}: {}", k->timestamp, job.choice.BriefReport());
   }
   // The earlier keyframes' own fills, moved into this keyframe.
   const CarriedFillResult c = carrier_.Next(key1, job.key1->world_from_camera, &r);
+  if (c.carried_pixels + c.corrected_pixels > 0)
+    spdlog::debug("fill {}: {}", k->timestamp, c.BriefReport());
+  return c;
+}
+
+void FillStage::Process(const StereoJob& job) {
+  const auto start = std::chrono::steady_clock::now();
+  const RgbdFrame& key1 = job.key1->frame;
+  KeyframeFill k;
+  k.timestamp = key1.timestamp_text;
+  k.hole_pixels = cv::countNonZero(key1.hole_mask);
+  CarriedFillResult c;
+  try {
+    c = Fill(job, &k);
+  } catch (const std::exception& e) {
+    // Contained: this keyframe keeps its sensor depth, the stage goes on.
+    Skip(key1, e.what());
+    return;
+  }
   k.filled_pixels = c.filled_pixels;
   k.carried_pixels = c.carried_pixels;
   k.corrected_pixels = c.corrected_pixels;
-  if (c.carried_pixels + c.corrected_pixels > 0)
-    spdlog::debug("fill {}: {}", k.timestamp, c.BriefReport());
   k.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  const fs::path base = fs::path(keyframe_dir_) / k.timestamp;
+  Write(key1, c);
+  done_.push_back(k);
+}
+
+void FillStage::Skip(const RgbdFrame& key1, const std::string& reason) {
+  spdlog::warn("fill: keyframe {} skipped: {}", key1.timestamp_text, reason);
+  KeyframeFill k;
+  k.timestamp = key1.timestamp_text;
+  k.hole_pixels = cv::countNonZero(key1.hole_mask);
+  k.termination = "failed";
+  k.failure = reason;
+  CarriedFillResult sensor_only;
+  sensor_only.filled_depth = key1.depth;
+  sensor_only.fill_mask = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
+  sensor_only.source = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
+  sensor_only.confidence = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
+  Write(key1, sensor_only);
+  done_.push_back(k);
+}
+
+void FillStage::Write(const RgbdFrame& key1, const CarriedFillResult& c) const {
+  const fs::path base = fs::path(keyframe_dir_) / key1.timestamp_text;
   WriteImage(base.string() + ".hole_mask.png", key1.hole_mask);
   WriteImage(base.string() + ".depth_filled.png", ToMillimetres(c.filled_depth));
-  if (!key1.color.empty()) {
+  if (key1.color.type() == CV_8UC3 && key1.color.size() == key1.depth.size()) {
     WriteImage(base.string() + ".fill_overlay.png",
                Overlay(key1.color, c.filled_depth, c.fill_mask, c.confidence, c.source));
     WriteImage(base.string() + ".color.png", key1.color);  // for colmap-export
   }
-  done_.push_back(k);
 }
 
 nlohmann::ordered_json FillStage::Report() const {
@@ -180,7 +242,20 @@ nlohmann::ordered_json FillStage::Report() const {
   int paired = 0;
   std::vector<double> errors, ms;
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  nlohmann::ordered_json failed = nlohmann::ordered_json::array();
+  // How many pairs took which path, and why sideways pairs did not get SGBM.
+  nlohmann::ordered_json paths = {{"rectified_sgbm", 0},
+                                  {"plane_sweep_forward", 0},
+                                  {"plane_sweep_degenerate_rectification", 0},
+                                  {"plane_sweep_requested", 0},
+                                  {"none", 0}};
+  nlohmann::ordered_json refused = {{"valid_region", 0}, {"disparity_range", 0}};
+  int rescaled = 0;  // SGBM pairs whose crop's focal length was reduced to fit the search
   for (const KeyframeFill& k : done_) {
+    if (!k.failure.empty()) failed.push_back({{"timestamp", k.timestamp}, {"reason", k.failure}});
+    if (!k.path.empty()) paths[k.path] = paths.value(k.path, 0) + 1;
+    if (!k.sgbm_refused.empty()) refused[k.sgbm_refused] = refused.value(k.sgbm_refused, 0) + 1;
+    rescaled += k.sgbm_rescaled;
     holes += k.hole_pixels;
     filled += k.filled_pixels;
     carried += k.carried_pixels;
@@ -199,6 +274,7 @@ nlohmann::ordered_json FillStage::Report() const {
          {"third", k.third.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(k.third)},
          {"third_view", k.third_view},
          {"method", k.method},
+         {"path", k.path.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(k.path)},
          {"hole_pixels", k.hole_pixels},
          {"filled_pixels", k.filled_pixels},
          {"carried_pixels", k.carried_pixels},
@@ -220,6 +296,11 @@ nlohmann::ordered_json FillStage::Report() const {
       {"keyframes_filled", static_cast<int>(done_.size())},
       {"keyframes_paired", paired},
       {"keyframes_dropped", dropped_},
+      {"keyframes_not_filled", not_filled_ + cancelled_left_},
+      {"failed_keyframes", failed},
+      {"pair_paths", paths},
+      {"sgbm_refused", refused},
+      {"sgbm_rescaled", rescaled},
       {"pair_median_ms",
        ms.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(ms[ms.size() / 2])},
       {"pair_max_ms", ms.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(ms.back())},

@@ -15,7 +15,14 @@
 // Each file is written atomically. Finish() drains the queue and joins the worker; Report() then
 // gives report.json's "fill" object.
 //
-// Thread-safety: Offer() from one producer thread; Finish() and Report() from the same thread.
+// Failures are contained per keyframe: a keyframe whose features, pairing, stereo or carry throws
+// is skipped with a warning naming it and the reason (its files then hold the sensor's depth
+// alone), listed in the report's "failed_keyframes", and the stage goes on. Only a file that
+// cannot be written stops the stage (Finish() rethrows it). Cancel() stops it early: what is
+// queued is left unfilled and counted.
+//
+// Thread-safety: Offer() from one producer thread; Cancel() from any thread; Finish() and
+// Report() from the producer's thread.
 #pragma once
 
 #include <atomic>
@@ -57,6 +64,10 @@ struct KeyframeFill {
   double baseline_m = 0;
   int matches = 0;
   bool third_view = false;
+  std::string path;            // StereoFillResult::path: how the pair was served
+  std::string sgbm_refused;    // why a sideways pair did not get SGBM (degenerate rectification)
+  bool sgbm_rescaled = false;  // its rectified focal length was reduced to fit the search
+  std::string failure;         // non-empty: the keyframe was skipped, and why
   int hole_pixels = 0;
   int filled_pixels = 0;             // own stereo and carried
   int carried_pixels = 0;            // holes filled from earlier keyframes' fills
@@ -72,11 +83,13 @@ class FillStage {
   FillStage(const FillStage&) = delete;
   FillStage& operator=(const FillStage&) = delete;
 
-  // False when the keyframe was dropped (queue full and drop_when_busy, or the worker failed).
+  // False when the keyframe was dropped (queue full and drop_when_busy, or the stage stopped).
   bool Offer(const RgbdFrame& frame, const SE3& world_from_camera);
   // Processes what is queued, pairs the last keyframes, joins the worker. Rethrows a worker error
-  // (e.g. an output file that could not be written).
+  // (an output file that could not be written).
   void Finish();
+  // Stops early: the keyframe in progress is finished, the queued ones are not filled.
+  void Cancel();
   nlohmann::ordered_json Report() const;
   const std::vector<KeyframeFill>& keyframes() const { return done_; }
 
@@ -87,6 +100,10 @@ class FillStage {
   };
   void Run();
   void Process(const StereoJob& job);
+  // The keyframe's stereo fill and carried fills (throws on failure).
+  CarriedFillResult Fill(const StereoJob& job, KeyframeFill* k);
+  void Write(const RgbdFrame& key1, const CarriedFillResult& c) const;
+  void Skip(const RgbdFrame& key1, const std::string& reason);
 
   Camera camera_;
   FillStageOptions options_;
@@ -94,7 +111,11 @@ class FillStage {
   BoundedQueue<Offered> queue_;
   std::vector<KeyframeFill> done_;  // written by the worker, read after Finish()
   FillCarrier carrier_;             // the last keyframes' own fills (worker only)
-  int dropped_ = 0;
+  int dropped_ = 0;                 // live input: keyframes that found the queue full
+  int not_filled_ = 0;              // offered after the stage stopped (producer's count)
+  int cancelled_left_ = 0;          // left queued by Cancel() (worker's count)
+  std::atomic<bool> cancelled_{false};
+  std::atomic<bool> stopped_{false};  // the worker ended (error or Cancel())
   std::exception_ptr error_;
   std::thread worker_;
 };

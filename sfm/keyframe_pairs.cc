@@ -340,7 +340,15 @@ StereoJob KeyframePairScheduler::MakeJob(size_t position) const {
   std::vector<std::shared_ptr<const StereoKeyframe>> candidates;
   for (size_t i = 0; i < keyframes_.size(); ++i)
     if (i != position) candidates.push_back(keyframes_[i]);
-  job.choice = SelectPartner(*job.key1, candidates, camera_, options_);
+  try {
+    job.choice = SelectPartner(*job.key1, candidates, camera_, options_);
+  } catch (const std::exception& e) {
+    // One keyframe's failure must not stall the stream: the job goes out without a partner.
+    job.error = std::string("pair selection failed: ") + e.what();
+    job.choice = PairChoice();
+    job.choice.reason = job.error;
+    return job;
+  }
   if (job.choice.found) job.key2 = candidates[job.choice.partner];
   if (job.choice.third >= 0) job.third = candidates[job.choice.third];
   return job;

@@ -145,13 +145,16 @@ struct StereoJob {
   std::shared_ptr<const StereoKeyframe> key2;   // null: no partner (choice.reason says why)
   std::shared_ptr<const StereoKeyframe> third;  // may be null
   PairChoice choice;  // choice.partner_pose / third_pose: the refined relative poses
+  std::string error;  // non-empty when pair selection threw (choice then holds no partner)
 };
 
 class KeyframePairScheduler {
  public:
   // Throws std::logic_error when options.Check() fails.
   KeyframePairScheduler(const Camera& camera, const PairSelectionOptions& options);
-  // Adds a keyframe; returns the jobs that became ready (at most one).
+  // Adds a keyframe; returns the jobs that became ready (at most one). Throws, adding nothing, when
+  // the frame's features cannot be computed; a pair selection that throws gives its job an
+  // `error` instead.
   std::vector<StereoJob> Add(const RgbdFrame& frame, const SE3& world_from_camera);
   // End of the stream: the jobs of the keyframes still waiting for later ones.
   std::vector<StereoJob> Flush();

@@ -16,79 +16,6 @@
 namespace gf {
 namespace {
 
-// Dense stereo points in the `first` camera's frame for a pair in which `first` is the left camera
-// after rectification (the configuration SGBM's left image needs). Returns false, computing
-// nothing, when `first` is the right one. second_from_first maps first-camera points into the
-// second camera (OpenCV's R, T). Disparities are searched for depths in [near_m, far_m] only.
-bool StereoPointsFromLeft(const cv::Mat& color_first, const cv::Mat& color_second,
-                          const Camera& camera, const SE3& second_from_first, double near_m,
-                          double far_m, const StereoFillOptions& options,
-                          std::vector<Eigen::Vector3d>* points) {
-  cv::Mat r(3, 3, CV_64F), t(3, 1, CV_64F);
-  const Eigen::Matrix3d rot = second_from_first.RotationMatrix();
-  for (int i = 0; i < 3; ++i) {
-    t.at<double>(i) = second_from_first.translation()[i];
-    for (int j = 0; j < 3; ++j) r.at<double>(i, j) = rot(i, j);
-  }
-  const cv::Size size(camera.width, camera.height);
-  cv::Mat r1, r2, p1, p2, q;
-  cv::stereoRectify(camera.CvK(), camera.CvDistortion(), camera.CvK(), camera.CvDistortion(), size,
-                    r, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, options.rectify_alpha, size);
-  const bool vertical = std::abs(p2.at<double>(1, 3)) > std::abs(p2.at<double>(0, 3));
-  const double shift = vertical ? p2.at<double>(1, 3) : p2.at<double>(0, 3);  // -f * baseline
-  if (shift >= 0) return false;  // `first` is the right camera: the caller swaps the pair
-  const double fb = -shift;      // f * baseline: disparity = fb / depth
-  cv::Mat map1, map1_fraction, map2, map2_fraction, gray1, gray2, rect1, rect2;
-  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r1, p1, size, CV_16SC2, map1,
-                              map1_fraction);
-  cv::initUndistortRectifyMap(camera.CvK(), camera.CvDistortion(), r2, p2, size, CV_16SC2, map2,
-                              map2_fraction);
-  cv::cvtColor(color_first, gray1, cv::COLOR_BGR2GRAY);
-  cv::cvtColor(color_second, gray2, cv::COLOR_BGR2GRAY);
-  cv::remap(gray1, rect1, map1, map1_fraction, cv::INTER_LINEAR);
-  cv::remap(gray2, rect2, map2, map2_fraction, cv::INTER_LINEAR);
-  if (vertical) {  // make epipolar lines horizontal
-    cv::Mat t1, t2;
-    cv::transpose(rect1, t1);
-    cv::transpose(rect2, t2);
-    rect1 = t1;
-    rect2 = t2;
-  }
-  // The search range covers the depth range (a pixel's depth in the rectified camera differs from
-  // keyframe 1's by the rectifying rotation; the caller's range has a margin for that), at most
-  // num_disparities.
-  const int min_disparity = std::max(0, static_cast<int>(std::floor(fb / far_m)) - 1);
-  const int wanted = static_cast<int>(std::ceil(fb / near_m)) + 1 - min_disparity;
-  const int num_disparities = std::clamp((wanted + 15) / 16 * 16, 16, options.num_disparities);
-  const int bs = options.block_size;
-  // SGBM's own left-right check (disp12MaxDiff) computes the right view's disparities from the
-  // same cost volume and drops pixels where the two disagree.
-  cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
-      min_disparity, num_disparities, bs, 8 * bs * bs, 32 * bs * bs,
-      static_cast<int>(std::lround(options.max_lr_difference_px)), 63, options.uniqueness_ratio,
-      options.speckle_window, options.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
-  cv::Mat raw;  // CV_16S, 4 fractional bits; invalid pixels are below min_disparity
-  sgbm->compute(rect1, rect2, raw);
-  const double f = p1.at<double>(0, 0), rcx = p1.at<double>(0, 2), rcy = p1.at<double>(1, 2);
-  Eigen::Matrix3d r1_eigen;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r1_eigen(i, j) = r1.at<double>(i, j);
-  const Eigen::Matrix3d first_from_rect = r1_eigen.transpose();
-  const int16_t lowest = static_cast<int16_t>(std::max(1, 16 * min_disparity));
-  points->clear();
-  points->reserve(static_cast<size_t>(raw.total()) / 2);
-  for (int row = 0; row < raw.rows; ++row) {
-    const int16_t* d = raw.ptr<int16_t>(row);
-    for (int col = 0; col < raw.cols; ++col) {
-      if (d[col] < lowest) continue;
-      const double z = 16.0 * fb / d[col];
-      const int u = vertical ? row : col, v = vertical ? col : row;  // rectified pixel
-      points->push_back(first_from_rect * Eigen::Vector3d((u - rcx) * z / f, (v - rcy) * z / f, z));
-    }
-  }
-  return true;
-}
-
 // Photometric check of a filled pixel in a third keyframe: the filled point, projected into the
 // third view, must look like it does in keyframe 1 (NCC of patches, a hole pixel's over hole
 // pixels only; mean grey levels for textureless patches). Points the third view's sensor sees
@@ -409,12 +336,8 @@ bool StereoFillOptions::Check(std::string* message) const {
   };
   if (!(min_baseline_m > 0)) return fail("min_baseline_m must be positive");
   if (!(epipole_margin_px >= 0)) return fail("epipole_margin_px must be >= 0");
-  if (num_disparities < 16 || num_disparities % 16)
-    return fail("num_disparities: positive multiple of 16");
-  if (block_size < 1 || block_size % 2 == 0) return fail("block_size must be odd");
-  if (!(rectify_alpha >= -1 && rectify_alpha <= 1)) return fail("rectify_alpha must be in [-1, 1]");
-  if (!(max_lr_difference_px >= 0) || !(min_depth_m > 0) || !(max_depth_m > min_depth_m))
-    return fail("need lr difference >= 0 and 0 < min_depth_m < max_depth_m");
+  if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m))
+    return fail("need 0 < min_depth_m < max_depth_m");
   if (edge_margin_px < 0 || edge_margin_near_px < 0 || hole_edge_margin_near_px < 0 ||
       !(edge_jump > 0))
     return fail("edge margins must be >= 0 and edge_jump positive");
@@ -429,7 +352,7 @@ bool StereoFillOptions::Check(std::string* message) const {
   if (photometric_patch_px < 3 || photometric_patch_px % 2 == 0 || !(min_ncc > -1) ||
       !(min_patch_std >= 0) || !(max_mean_difference > 0) || !(occlusion_margin >= 0))
     return fail("photometric check: odd patch >= 3, min_ncc > -1, positive thresholds");
-  return plane_sweep.Check(message);
+  return sgbm.Check(message) && plane_sweep.Check(message);
 }
 
 std::string StereoFillResult::BriefReport() const {
@@ -538,7 +461,7 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   }
   const PhotometricCheck photometric(key1, third, camera, options);
   result.third_view_used = photometric.active();
-  const bool sgbm = !forward && !options.plane_sweep_always;
+  bool sgbm = !forward && !options.plane_sweep_always;
   // The depth range that stereo searches: what the sensor measures in keyframe 1 (2nd to 98th
   // percentile), widened by a quarter, within [min_depth_m, max_depth_m].
   const std::vector<float> measured = SortedDepthSample(key1.depth, 4);
@@ -553,25 +476,29 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     result.termination = "measured depth outside [min_depth_m, max_depth_m]";
     return result;
   }
+  result.path = forward ? "plane_sweep_forward" : sgbm ? "rectified_sgbm" : "plane_sweep_requested";
   const Holes holes = FindHoles(key1.hole_mask);
   std::vector<float> errors, errors_m;  // stereo vs sensor on measured pixels, over all methods
   bool agrees = false;                  // some method agreed with the sensor
   cv::Mat see_through_rim;              // the rims of the holes SGBM sees into (empty: none)
+  SgbmRectification rect;
+  if (sgbm) {
+    rect = RectifyForSgbm(camera, key1_from_key2, near, far, options.sgbm);
+    result.rectification = rect;
+    if (!rect.usable) {
+      // A degenerate rectification: the plane sweep, which needs none, fills the pair.
+      sgbm = false;
+      result.path = "plane_sweep_degenerate_rectification";
+      result.sgbm_refused = rect.refusal;
+    }
+  }
   if (sgbm) {
     cv::Mat stereo = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
     // Stereo runs with the left camera of the pair first; when that is keyframe 2, its points are
     // moved into keyframe 1 with the known pose.
-    SE3 key1_from_points;
+    const SE3 key1_from_points = rect.swapped ? key1_from_key2 : SE3();
     std::vector<Eigen::Vector3d> points;
-    if (!StereoPointsFromLeft(key1.color, key2.color, camera, key1_from_key2.Inverse(), near, far,
-                              options, &points)) {
-      key1_from_points = key1_from_key2;
-      if (!StereoPointsFromLeft(key2.color, key1.color, camera, key1_from_key2, near, far, options,
-                                &points)) {
-        result.termination = "rectification failed";
-        return result;
-      }
-    }
+    points = SgbmPoints(rect, key1, key2, camera, options.sgbm);
     // Back into keyframe 1's image; the nearest surface wins.
     for (const Eigen::Vector3d& q : points) {
       const Eigen::Vector3d p = key1_from_points * q;

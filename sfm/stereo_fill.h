@@ -6,12 +6,10 @@
 // the plane sweep of sfm/plane_sweep.h over the holes instead, with the third view when given;
 // after SGBM, the sweep also covers the holes SGBM found no depth for, validated separately,
 // except the rims of the holes SGBM sees into, clear glass's above all),
-// rectify both colour images (cv::stereoRectify) with the pair's left camera first
-// (a mostly vertical baseline is transposed into a horizontal one), compute disparity with
-// cv::StereoSGBM over the disparities of keyframe 1's measured depth range, keeping pixels whose
-// right-view disparity agrees (SGBM's left-right check), convert to metric depth in the left
-// camera, move it into keyframe 1 with the known pose and project it into keyframe 1's image
-// (z-buffer), then validate: the stereo depth must agree with the Kinect on measured pixels around
+// rectify sideways pairs and match them with SGBM over the disparities of keyframe 1's measured
+// depth range (sfm/rectified_sgbm.h; a pair whose rectification is degenerate goes to the plane
+// sweep instead, and StereoFillResult::path says so), move the depth into keyframe 1 with the
+// known pose and project it into keyframe 1's image (z-buffer), then validate: the stereo depth must agree with the Kinect on measured pixels around
 // each hole, or that hole is left empty. In a projector shadow the depth must lie nearer the
 // shadow's far side than its near one (the shadow is the far surface). Where a third keyframe sees
 // the filled point, its colour there must match keyframe 1's (normalised cross-correlation of
@@ -34,6 +32,7 @@
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
 #include "sfm/plane_sweep.h"
+#include "sfm/rectified_sgbm.h"
 
 namespace gf {
 
@@ -50,16 +49,8 @@ struct StereoFillOptions {
   bool sweep_sgbm_rejects = false;
   bool sweep_shadows = false;  // plane-sweep projector-shadow holes too
   PlaneSweepOptions plane_sweep;
-  int num_disparities = 128;   // most disparities SGBM searches (multiple of 16); the range
-                               // itself follows keyframe 1's depth range
-  double rectify_alpha = 0.0;  // cv::stereoRectify alpha: 0 crops to valid pixels, 1 keeps all
-  int block_size = 5;          // SGBM block, pixels (odd)
-  int uniqueness_ratio = 10;   // SGBM uniqueness, percent
-  int speckle_window = 100;    // SGBM speckle filter window, pixels
-  int speckle_range = 2;       // SGBM speckle range, disparity units
-  double max_lr_difference_px = 1.0;  // left-right consistency, pixels (rounded: SGBM's
-                                      // disp12MaxDiff)
-  double min_depth_m = 0.3;           // filled depths outside this range are dropped, metres
+  SgbmOptions sgbm;          // rectified SGBM of sideways pairs (sfm/rectified_sgbm.h)
+  double min_depth_m = 0.3;  // filled depths outside this range are dropped, metres
   double max_depth_m = 6.0;
   int ring_px = 6;                    // validation ring around each hole, pixels
   int min_ring_samples = 15;          // holes with fewer stereo/Kinect pairs in the ring stay empty
@@ -127,14 +118,20 @@ struct ThirdView {
 struct StereoFillResult {
   bool success = false;
   std::string termination;  // "ok" or why the pair was not used
-  std::string method;       // "rectified SGBM" or "plane sweep"
-  cv::Mat stereo_depth;     // CV_32F metres in keyframe 1's image, 0 = none (all stereo)
-  cv::Mat filled_depth;     // CV_32F: the sensor's depth plus the filled pixels
-  cv::Mat fill_mask;        // CV_8U: 255 where a hole was filled
-  cv::Mat source;           // CV_8U: DepthSource per pixel of filled_depth
-  cv::Mat confidence;       // CV_32F in [0, 1]: 1 on sensor pixels, the fill's confidence on filled
-                            // ones (ring agreement times photometric agreement), 0 elsewhere
-  int hole_pixels = 0;      // pixels the sensor left empty
+  std::string method;       // "rectified SGBM", "plane sweep", "rectified SGBM + plane sweep"
+  // How the pair was served, as report.json counts pairs: "rectified_sgbm", "plane_sweep_forward"
+  // (epipole in an image), "plane_sweep_degenerate_rectification" (sgbm_refused says why),
+  // "plane_sweep_requested" (plane_sweep_always), or "none" (the pair was not used).
+  std::string path = "none";
+  std::string sgbm_refused;         // SgbmRectification::refusal for degenerate sideways pairs
+  SgbmRectification rectification;  // of sideways pairs (BriefReport() for the log)
+  cv::Mat stereo_depth;             // CV_32F metres in keyframe 1's image, 0 = none (all stereo)
+  cv::Mat filled_depth;             // CV_32F: the sensor's depth plus the filled pixels
+  cv::Mat fill_mask;                // CV_8U: 255 where a hole was filled
+  cv::Mat source;                   // CV_8U: DepthSource per pixel of filled_depth
+  cv::Mat confidence;   // CV_32F in [0, 1]: 1 on sensor pixels, the fill's confidence on filled
+                        // ones (ring agreement times photometric agreement), 0 elsewhere
+  int hole_pixels = 0;  // pixels the sensor left empty
   int filled_pixels = 0;
   int rejected_by_ring = 0;        // hole pixels with stereo depth whose hole failed the ring test
   int rejected_by_photometry = 0;  // ... that the third view contradicted
