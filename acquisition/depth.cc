@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 #include <vector>
 
@@ -87,6 +88,39 @@ bool DepthConversionOptions::Check(std::string* message) const {
     return false;
   }
   return true;
+}
+
+double MedianReturnDepth(const cv::Mat& raw, const DepthConvention& convention, int step) {
+  GF_CHECK(raw.type() == CV_16UC1 && step >= 1, "raw depth must be CV_16UC1, step >= 1");
+  std::vector<double> metres;
+  for (int y = 0; y < raw.rows; y += step) {
+    const uint16_t* row = raw.ptr<uint16_t>(y);
+    for (int x = 0; x < raw.cols; x += step) {
+      const double m = convention.ToMetres(row[x]);
+      if (m > 0) metres.push_back(m);
+    }
+  }
+  if (metres.empty()) return 0.0;
+  std::nth_element(metres.begin(), metres.begin() + metres.size() / 2, metres.end());
+  return metres[metres.size() / 2];
+}
+
+std::string DepthScaleProblem(double median_m, const DepthConvention& convention) {
+  if (!(median_m > 0) ||
+      (median_m >= kPlausibleMedianDepthMinM && median_m <= kPlausibleMedianDepthMaxM))
+    return "";
+  std::ostringstream s;
+  s.precision(3);
+  s << "the median depth is " << median_m << " m with depth " << convention.Name()
+    << ", outside the " << kPlausibleMedianDepthMinM << "-" << kPlausibleMedianDepthMaxM
+    << " m of indoor captures";
+  if (convention.units_per_metre() > 0) {
+    std::ostringstream scale;
+    scale << std::fixed << std::setprecision(0) << convention.units_per_metre();
+    s << ": is depth_scale " << scale.str()
+      << " right? (raw depth units per metre: TUM uses 5000, millimetre streams 1000)";
+  }
+  return s.str();
 }
 
 void ConvertDepth(const cv::Mat& raw, const DepthConvention& convention,

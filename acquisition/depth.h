@@ -89,6 +89,19 @@ struct DepthConversionOptions {
 void ConvertDepth(const cv::Mat& raw, const DepthConvention& convention,
                   const DepthConversionOptions& options, cv::Mat* depth_m, cv::Mat* hole_mask);
 
+// The median depth, in metres, of a raw depth image's returns (every step-th pixel each way),
+// before any range limit; 0 when it has none. A depth scale that is off by a factor moves it by
+// that factor.
+double MedianReturnDepth(const cv::Mat& raw, const DepthConvention& convention, int step = 4);
+
+// Indoor RGB-D captures put the median return within these bounds (Kinect-class sensors measure
+// 0.4-8 m): a median outside them almost certainly means a wrong depth_scale.
+constexpr double kPlausibleMedianDepthMinM = 0.3;
+constexpr double kPlausibleMedianDepthMaxM = 10.0;
+// Empty when median_m (> 0) lies within those bounds, else a one-line problem naming the
+// convention and the scale that would fix it.
+std::string DepthScaleProblem(double median_m, const DepthConvention& convention);
+
 // Metric depth (CV_32F, 0 = none) back to raw units, e.g. for writing a TUM-format PNG.
 cv::Mat DepthToRaw(const cv::Mat& depth_m, const DepthConvention& convention);
 

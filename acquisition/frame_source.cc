@@ -183,6 +183,7 @@ void ProcessRawDepth(const cv::Mat& raw, const std::string& where, const CameraF
   const std::string problem = convention.ValidateRaw(raw);
   if (!problem.empty()) throw InputError(where, problem);
   ConvertDepth(raw, convention, options.depth, &f->depth, &f->hole_mask);
+  f->median_return_m = MedianReturnDepth(raw, convention);
   ClassifyShadows(f->depth, depth_cam.fx, options.shadows, &f->hole_mask);
   f->sensor_holes = CountHoles(f->hole_mask);
   if (!registered) {
@@ -192,6 +193,13 @@ void ProcessRawDepth(const cv::Mat& raw, const std::string& where, const CameraF
     f->depth = depth;
     f->hole_mask = holes;
   }
+}
+
+int FolderFrameSource::MissingColorFiles() const {
+  int missing = 0;
+  for (const FolderFrameEntry& e : entries_)
+    missing += !e.color_path.empty() && !IsRegularFile(e.color_path);
+  return missing;
 }
 
 FolderFrameSource::FolderFrameSource(std::string kind, std::string input, CameraFile camera,

@@ -80,6 +80,9 @@ class FolderFrameSource : public FrameSource {
   std::optional<int> FrameCount() const override { return static_cast<int>(entries_.size()); }
   bool Next(RgbdFrame* frame) override;
 
+  // Entries whose colour file is not there (Next() would fail on them when loading colour).
+  int MissingColorFiles() const;
+
   // Frames that the index listed but could not pair (e.g. depth without colour within 20 ms).
   int unmatched_depth = 0;
   int unmatched_color = 0;

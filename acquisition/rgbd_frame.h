@@ -23,6 +23,9 @@ struct RgbdFrame {
   // Holes counted in the sensor's own depth image, before registration to colour (which adds
   // pixels outside the depth camera's view); equal to CountHoles(hole_mask) for registered input.
   HoleStats sensor_holes;
+  // MedianReturnDepth of the sensor's depth image (metres, before range limits); 0 when it has no
+  // returns or the source does not know it (in-memory frames).
+  double median_return_m = 0;
   std::string color_path;  // where the colour came from, for error messages (may be empty)
   std::string depth_path;  // where the depth came from (may be empty)
 };

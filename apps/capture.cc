@@ -1,19 +1,14 @@
 #include "apps/capture.h"
 
-#include <atomic>
-#include <csignal>
 #include <iostream>
 
 #include "acquisition/errors.h"
 #include "acquisition/frame_sink.h"
 #include "acquisition/frame_source.h"
+#include "apps/interrupt.h"
 #include "apps/progress.h"
 
 namespace gf {
-namespace {
-std::atomic<bool> g_stop{false};
-extern "C" void OnInterrupt(int) { g_stop = true; }
-}  // namespace
 
 bool CaptureOptions::Check(std::string* message) const {
   if (device.empty() || out_dir.empty() || frames < 0) {
@@ -32,21 +27,14 @@ int RunCapture(const CaptureOptions& options) {
   TumFolderSink sink(options.out_dir, source->camera_file());
   std::optional<int> total =
       options.frames > 0 ? std::optional<int>(options.frames) : source->FrameCount();
-  g_stop = false;
-  auto previous = std::signal(SIGINT, OnInterrupt);
+  const InterruptHandler interrupt;  // Ctrl-C ends a live capture cleanly
   TerminalProgress progress("capture", total);
   RgbdFrame frame;
-  try {
-    while (!g_stop && (options.frames == 0 || sink.frames_written() < options.frames) &&
-           source->Next(&frame)) {
-      sink.Write(frame);
-      progress.Update(sink.frames_written());
-    }
-  } catch (...) {
-    std::signal(SIGINT, previous);
-    throw;
+  while (!*interrupt.signal() && (options.frames == 0 || sink.frames_written() < options.frames) &&
+         source->Next(&frame)) {
+    sink.Write(frame);
+    progress.Update(sink.frames_written());
   }
-  std::signal(SIGINT, previous);
   progress.Finish();
   if (sink.frames_written() == 0) throw InputError(options.device, "delivered no frames");
   sink.Close();

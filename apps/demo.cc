@@ -244,8 +244,8 @@ void RunDemo(const DemoOptions& options) {
   report["fill_by_material"] = fill_by_material;
   report["clear_glass_filled_at_glass_depth"] = clear_glass_at_glass_depth;
   report["run"] = run_dir;
-  report["config_file"] = options.config_file.empty() ? nlohmann::json()
-                                                      : nlohmann::json(options.config_file);
+  report["config_file"] =
+      options.config_file.empty() ? nlohmann::json() : nlohmann::json(options.config_file);
   report["datasets"] = nlohmann::json::array();
   for (const std::string& input : inputs) {
     TerminalProgress progress("demo: " + fs::path(input).filename().string(), std::nullopt);

@@ -17,8 +17,8 @@ namespace gf {
 
 struct DemoOptions {
   std::string out_dir = "demo-out";
-  std::string data_dir;  // "" = ../shared/datasets when present
-  int frames = 30;       // frames of the glass scene
+  std::string data_dir;     // "" = ../shared/datasets when present
+  int frames = 30;          // frames of the glass scene
   std::string config_file;  // --config FILE: tracker and fill settings for the reconstruction
                             // (apps/config.h), as `reconstruct --config` takes them
   bool Check(std::string* message = nullptr) const;

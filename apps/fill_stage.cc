@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
+#include <thread>
 
 #include "acquisition/errors.h"
 #include "acquisition/image_io.h"
@@ -17,6 +18,11 @@ namespace fs = std::filesystem;
 
 namespace gf {
 namespace {
+
+// A keyframe's name in outputs: the depth timestamp as the input lists it, else the frame index.
+std::string Name(const RgbdFrame& frame) {
+  return frame.timestamp_text.empty() ? std::to_string(frame.index) : frame.timestamp_text;
+}
 
 cv::Mat ToMillimetres(const cv::Mat& depth_m) {
   cv::Mat mm(depth_m.size(), CV_16UC1);
@@ -98,22 +104,27 @@ FillStage::~FillStage() {
 
 bool FillStage::Offer(const RgbdFrame& frame, const SE3& world_from_camera) {
   if (options_.drop_when_busy ? queue_.TryPush({frame, world_from_camera})
-                              : queue_.Push({frame, world_from_camera}))
+                              : queue_.Push({frame, world_from_camera})) {
+    ++accepted_;
     return true;
-  if (stopped_) {
+  }
+  if (stopped_ || cancelled_) {
     ++not_filled_;
-    spdlog::debug("fill: keyframe {} not filled (the fill stage has stopped)",
-                  frame.timestamp_text);
+    spdlog::debug("fill: keyframe {} not filled (the fill stage has stopped)", Name(frame));
   } else {
     ++dropped_;
     spdlog::debug("fill: keyframe {} dropped (stereo worker busy: {} keyframes queued)",
-                  frame.timestamp_text, options_.queue_capacity);
+                  Name(frame), options_.queue_capacity);
   }
   return false;
 }
 
-void FillStage::Finish() {
+void FillStage::Finish(const std::function<bool()>& cancel) {
   queue_.Close();
+  while (cancel && !stopped_ && !cancelled_) {
+    if (cancel()) Cancel();
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
   if (worker_.joinable()) worker_.join();
   if (error_) std::rethrow_exception(error_);
 }
@@ -138,14 +149,13 @@ void FillStage::Run() {
       for (const StereoJob& job : jobs) Process(job);
     }
     if (!cancelled_)
-      for (const StereoJob& job : scheduler.Flush()) Process(job);
+      for (const StereoJob& job : scheduler.Flush())
+        if (!cancelled_) Process(job);
   } catch (...) {
     error_ = std::current_exception();  // an output that could not be written
   }
   stopped_ = true;
   queue_.Close();  // later Offer() calls drop their frames
-  Offered left;
-  while (queue_.Pop(&left)) ++cancelled_left_;
 }
 
 CarriedFillResult FillStage::Fill(const StereoJob& job, KeyframeFill* k) {
@@ -162,8 +172,8 @@ CarriedFillResult FillStage::Fill(const StereoJob& job, KeyframeFill* k) {
     spdlog::debug("fill {}: {}; {}", k->timestamp, job.choice.BriefReport(),
                   job.choice.partner_pose.BriefReport());
     r = FillHolesByStereo(key1, job.key2->frame, camera_, key1_from_key2, options_.stereo, third);
-    k->partner = job.key2->frame.timestamp_text;
-    if (job.third) k->third = job.third->frame.timestamp_text;
+    k->partner = Name(job.key2->frame);
+    if (job.third) k->third = Name(job.third->frame);
     k->method = r.method;
     k->path = r.path;
     k->sgbm_refused = r.sgbm_refused;
@@ -191,7 +201,7 @@ void FillStage::Process(const StereoJob& job) {
   const auto start = std::chrono::steady_clock::now();
   const RgbdFrame& key1 = job.key1->frame;
   KeyframeFill k;
-  k.timestamp = key1.timestamp_text;
+  k.timestamp = Name(key1);
   k.hole_pixels = cv::countNonZero(key1.hole_mask);
   CarriedFillResult c;
   try {
@@ -211,9 +221,9 @@ void FillStage::Process(const StereoJob& job) {
 }
 
 void FillStage::Skip(const RgbdFrame& key1, const std::string& reason) {
-  spdlog::warn("fill: keyframe {} skipped: {}", key1.timestamp_text, reason);
+  spdlog::warn("fill: keyframe {} skipped: {}", Name(key1), reason);
   KeyframeFill k;
-  k.timestamp = key1.timestamp_text;
+  k.timestamp = Name(key1);
   k.hole_pixels = cv::countNonZero(key1.hole_mask);
   k.termination = "failed";
   k.failure = reason;
@@ -227,7 +237,7 @@ void FillStage::Skip(const RgbdFrame& key1, const std::string& reason) {
 }
 
 void FillStage::Write(const RgbdFrame& key1, const CarriedFillResult& c) const {
-  const fs::path base = fs::path(keyframe_dir_) / key1.timestamp_text;
+  const fs::path base = fs::path(keyframe_dir_) / Name(key1);
   WriteImage(base.string() + ".hole_mask.png", key1.hole_mask);
   WriteImage(base.string() + ".depth_filled.png", ToMillimetres(c.filled_depth));
   if (key1.color.type() == CV_8UC3 && key1.color.size() == key1.depth.size()) {
@@ -296,7 +306,8 @@ nlohmann::ordered_json FillStage::Report() const {
       {"keyframes_filled", static_cast<int>(done_.size())},
       {"keyframes_paired", paired},
       {"keyframes_dropped", dropped_},
-      {"keyframes_not_filled", not_filled_ + cancelled_left_},
+      // Queued but never filled (the run stopped first), and offered after the stage stopped.
+      {"keyframes_not_filled", accepted_ - static_cast<int>(done_.size()) + not_filled_},
       {"failed_keyframes", failed},
       {"pair_paths", paths},
       {"sgbm_refused", refused},

@@ -27,6 +27,7 @@
 
 #include <atomic>
 #include <exception>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
@@ -86,8 +87,9 @@ class FillStage {
   // False when the keyframe was dropped (queue full and drop_when_busy, or the stage stopped).
   bool Offer(const RgbdFrame& frame, const SE3& world_from_camera);
   // Processes what is queued, pairs the last keyframes, joins the worker. Rethrows a worker error
-  // (an output file that could not be written).
-  void Finish();
+  // (an output file that could not be written). While it waits, a `cancel` that returns true
+  // (polled every 50 ms) cancels the rest.
+  void Finish(const std::function<bool()>& cancel = {});
   // Stops early: the keyframe in progress is finished, the queued ones are not filled.
   void Cancel();
   nlohmann::ordered_json Report() const;
@@ -112,8 +114,8 @@ class FillStage {
   std::vector<KeyframeFill> done_;  // written by the worker, read after Finish()
   FillCarrier carrier_;             // the last keyframes' own fills (worker only)
   int dropped_ = 0;                 // live input: keyframes that found the queue full
+  int accepted_ = 0;                // keyframes Offer() queued (producer's count)
   int not_filled_ = 0;              // offered after the stage stopped (producer's count)
-  int cancelled_left_ = 0;          // left queued by Cancel() (worker's count)
   std::atomic<bool> cancelled_{false};
   std::atomic<bool> stopped_{false};  // the worker ended (error or Cancel())
   std::exception_ptr error_;

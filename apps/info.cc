@@ -1,6 +1,7 @@
 #include "apps/info.h"
 
 #include "acquisition/depth.h"
+#include "acquisition/stats.h"
 
 namespace gf {
 
@@ -15,10 +16,15 @@ nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions op
 
   HoleStats holes;
   RgbdFrame frame;
-  int frames = 0;
+  int frames = 0, without_depth = 0;
   double first_time = 0, last_time = 0;
+  std::vector<double> medians;  // per frame with returns: the median return depth, metres
   while (source->Next(&frame)) {
     holes += frame.sensor_holes;
+    if (frame.median_return_m > 0)
+      medians.push_back(frame.median_return_m);
+    else
+      ++without_depth;
     if (frames == 0) first_time = frame.timestamp;
     last_time = frame.timestamp;
     ++frames;
@@ -51,6 +57,25 @@ nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions op
   j["holes"] = {{"no_return", pixels ? holes.no_return / pixels : 0.0},
                 {"out_of_range", pixels ? holes.out_of_range / pixels : 0.0},
                 {"shadow", pixels ? holes.shadow / pixels : 0.0}};
+  // What would make a reconstruction of this input fail or go wrong, said plainly.
+  nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
+  if (auto* folder = dynamic_cast<FolderFrameSource*>(source.get())) {
+    const int missing = folder->MissingColorFiles();
+    if (missing > 0)
+      warnings.push_back(std::to_string(missing) + " of " + std::to_string(frames) +
+                         " frames list a colour image that is not there");
+  }
+  if (frames > 0 && without_depth == frames)
+    warnings.push_back("no frame has any depth: every pixel is a hole");
+  else if (without_depth > 0)
+    warnings.push_back(std::to_string(without_depth) + " of " + std::to_string(frames) +
+                       " frames have no depth at all");
+  const double median_depth = Median(medians, 0.0);
+  j["median_depth_m"] =
+      medians.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(median_depth);
+  const std::string scale = DepthScaleProblem(median_depth, source->depth_convention());
+  if (!scale.empty()) warnings.push_back(scale);
+  j["warnings"] = warnings;
   return j;
 }
 

@@ -1,7 +1,8 @@
 // The `glassfusion` command line: subcommand dispatch (DESIGN.md, "Command line contract").
 //
-// Exit codes: 0 success, 1 internal error, 2 bad input or usage (one line "error: <file>:
-// <problem>").
+// Exit codes: 0 success, 1 internal error, 2 bad input, an output that cannot be written, or
+// usage (one line "error: <file>: <problem>"), 128 + N when stopped by signal N after writing a
+// partial run (130 for Ctrl-C).
 #include <malloc.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -12,6 +13,7 @@
 
 #include "acquisition/errors.h"
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 
 int main(int argc, char** argv) {
   // Every keyframe pair allocates and frees tens of megabytes (images, cost volumes). glibc would
@@ -38,6 +40,9 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
+  } catch (const gf::Interrupted& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 128 + e.signal();
   } catch (const gf::InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;

@@ -1,0 +1,38 @@
+// Ctrl-C (SIGINT) and SIGTERM for long commands: while an InterruptHandler lives, the first such
+// signal only sets a flag that the command polls (so it can stop cleanly and write what it has);
+// the handlers are then reset, so a second Ctrl-C ends the process at once.
+//
+// One handler at a time (it owns the process's signal dispositions); not thread-safe to create.
+#pragma once
+
+#include <atomic>
+#include <stdexcept>
+#include <string>
+
+namespace gf {
+
+class InterruptHandler {
+ public:
+  InterruptHandler();
+  ~InterruptHandler();  // restores the dispositions found at construction
+  InterruptHandler(const InterruptHandler&) = delete;
+  InterruptHandler& operator=(const InterruptHandler&) = delete;
+  // The signal received (SIGINT, SIGTERM), 0 while none; safe to read from any thread.
+  const std::atomic<int>* signal() const;
+};
+
+// A command stopped by a signal after writing what it had; main exits with 128 + signal.
+class Interrupted : public std::runtime_error {
+ public:
+  Interrupted(int signal, const std::string& message)
+      : std::runtime_error(message), signal_(signal) {}
+  int signal() const { return signal_; }
+
+ private:
+  int signal_;
+};
+
+// "SIGINT", "SIGTERM" or "signal N".
+std::string SignalName(int signal);
+
+}  // namespace gf
