@@ -17,7 +17,9 @@ DEB_PACKAGES := cmake make g++ pkg-config \
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all deps configure build test demo clean format
+SANITIZE_DIR ?= build-asan
+
+.PHONY: all deps configure build test sanitize demo clean format
 
 all: build
 
@@ -43,11 +45,21 @@ build: configure
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
+# The unit tests (not the end-to-end CLI tests, label "tests") built with AddressSanitizer and
+# UndefinedBehaviorSanitizer; CI runs it after `make test`.
+sanitize: deps
+	cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGF_SANITIZE=ON \
+	  -DGF_BUILD_TESTS=ON -DGF_BUILD_BENCHMARKS=OFF $(CMAKE_FLAGS)
+	cmake --build $(SANITIZE_DIR) -j $(JOBS)
+	cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
+	  ctest --output-on-failure -j $(JOBS) -LE '^tests$$'
+
 demo: build
 	$(BUILD_DIR)/apps/glassfusion demo --out $(DEMO_OUT)
 
 format:
-	find acquisition registration sfm surfels apps datasets tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
+	find acquisition registration sfm surfels pipeline apps datasets tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
 
 clean:
-	rm -rf $(BUILD_DIR) $(DEMO_OUT)
+	rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(DEMO_OUT)

@@ -34,6 +34,10 @@ enum class HoleCode : uint8_t {
   kShadow = 3,      // projector occlusion shadow at a depth discontinuity
 };
 
+// Where a pixel's depth came from: the `source` field of map.ply and of every filled depth image.
+// kCarried: stereo depth of earlier keyframes carried into this one (sfm/fill_carry.h).
+enum class DepthSource : uint8_t { kNone = 0, kSensor = 1, kStereo = 2, kColmap = 3, kCarried = 4 };
+
 class DepthConvention {
  public:
   enum class Kind { kMillimetres, kScaledUnits, kKinectV1Raw11Bit };

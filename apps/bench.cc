@@ -20,11 +20,10 @@
 #include "acquisition/file_util.h"
 #include "acquisition/stats.h"
 #include "acquisition/trajectory_metrics.h"
-#include "apps/config.h"
 #include "apps/progress.h"
+#include "pipeline/settings.h"
 #include "registration/tracker.h"
-#include "sfm/fill_carry.h"
-#include "sfm/keyframe_pairs.h"
+#include "sfm/keyframe_filler.h"
 #include "sfm/stereo_fill.h"
 
 namespace fs = std::filesystem;
@@ -84,44 +83,34 @@ std::optional<double> TimeOpenCvSgbm(const RgbdFrame& key1, const RgbdFrame& key
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-// Stereo hole filling per keyframe pair on one core (see BenchOptions::fill_every).
+// Stereo hole filling per keyframe pair on one core (see BenchOptions::fill_every), by the
+// KeyframeFiller that the pipeline's fill stage runs.
 nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
                                        const Trajectory& tracked, const Camera& camera,
                                        const BenchOptions& options) {
   const int threads = cv::getNumThreads();
   cv::setNumThreads(1);
-  KeyframePairScheduler scheduler(camera, options.fill.pairs);
+  KeyframeFiller filler(camera, options.fill.Filler());
   std::vector<double> pair_ms, fill_ms, carry_ms, sgbm_ms;
   long long holes = 0, filled = 0, filled_with_carry = 0;
-  int unpaired = 0;
-  std::map<std::string, int> methods;
-  FillCarrier carrier(camera, options.fill.carry);
-  // Carries the earlier keyframes' fills into this one (as the fill stage of reconstruct does).
-  auto carry = [&](const StereoKeyframe& key1, const StereoFillResult* own) {
-    const auto t0 = Clock::now();
-    filled_with_carry += carrier.Next(key1.frame, key1.world_from_camera, own).filled_pixels;
-    carry_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-  };
-  auto process = [&](const StereoJob& job) {
-    if (!job.key2) {
-      ++unpaired;
-      holes += cv::countNonZero(job.key1->frame.hole_mask);
-      carry(*job.key1, nullptr);
+  int unpaired = 0, failed = 0;
+  std::map<std::string, int> methods, paths;
+  auto process = [&](const FilledKeyframe& k) {
+    holes += k.record.hole_pixels;
+    filled_with_carry += k.record.filled_pixels;
+    carry_ms.push_back(k.carry_ms);
+    failed += !k.record.failure.empty();
+    if (!k.partner) {
+      unpaired += k.record.failure.empty();
       return;
     }
-    const SE3& key1_from_key2 = job.choice.partner_pose.key1_from_key2;
-    ThirdView third;
-    if (job.third) third = {&job.third->frame, job.choice.third_pose.key1_from_key2};
-    const auto t0 = Clock::now();
-    const StereoFillResult r = FillHolesByStereo(job.key1->frame, job.key2->frame, camera,
-                                                 key1_from_key2, options.fill.stereo, third);
-    fill_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-    holes += r.hole_pixels;
+    const StereoFillResult& r = k.stereo;
+    fill_ms.push_back(k.stereo_ms);
     filled += r.filled_pixels;
-    carry(*job.key1, &r);
     ++methods[r.method.empty() ? r.termination : r.method];
+    ++paths[r.path];
     if (r.rectification.usable) {
-      const std::optional<double> ms = TimeOpenCvSgbm(job.key1->frame, job.key2->frame, camera,
+      const std::optional<double> ms = TimeOpenCvSgbm(k.key->frame, k.partner->frame, camera,
                                                       r.rectification, options.fill.stereo.sgbm);
       if (ms) sgbm_ms.push_back(*ms);
     }
@@ -130,13 +119,11 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
       (static_cast<int>(frames.size()) + options.fill_every - 1) / options.fill_every;
   TerminalProgress progress("bench: stereo fill", keyframes);
   for (int i = 0, k = 0; i < static_cast<int>(frames.size()); i += options.fill_every, ++k) {
-    const auto t0 = Clock::now();
-    const std::vector<StereoJob> jobs = scheduler.Add(frames[i], tracked[i].world_from_camera);
-    pair_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-    for (const StereoJob& job : jobs) process(job);
+    for (const FilledKeyframe& f : filler.Add(frames[i], tracked[i].world_from_camera)) process(f);
+    pair_ms.push_back(filler.last_pairing_ms());
     progress.Update(k + 1);
   }
-  for (const StereoJob& job : scheduler.Flush()) process(job);
+  for (const FilledKeyframe& f : filler.Flush()) process(f);
   cv::setNumThreads(threads);
   nlohmann::ordered_json j;
   j["keyframe_every"] = options.fill_every;
@@ -144,6 +131,7 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
   j["keyframes"] = keyframes;
   j["pairs"] = fill_ms.size();
   j["unpaired_keyframes"] = unpaired;
+  j["failed_keyframes"] = failed;
   j["pair_selection_median_ms"] = Median(pair_ms);  // features, matching, pose refinement
   j["median_ms"] = Median(fill_ms);                 // FillHolesByStereo
   j["max_ms"] = fill_ms.empty() ? 0.0 : *std::max_element(fill_ms.begin(), fill_ms.end());
@@ -151,6 +139,7 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
   j["fill_rate"] = holes ? static_cast<double>(filled) / holes : 0.0;  // own stereo
   j["fill_rate_with_carry"] = holes ? static_cast<double>(filled_with_carry) / holes : 0.0;
   j["methods"] = methods;
+  j["pair_paths"] = paths;
   j["opencv_sgbm_pairs"] = sgbm_ms.size();
   j["opencv_sgbm_median_ms"] =
       sgbm_ms.empty() ? nlohmann::json(nullptr) : nlohmann::json(Median(sgbm_ms));

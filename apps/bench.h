@@ -8,16 +8,16 @@
 // world_from_current = world_from_previous * Rt^-1 (OpenCV's Rt maps source points to the
 // destination frame). A peer that fails on a frame keeps its previous pose there, as ours does.
 //
-// With fill_every, pair selection (sfm/keyframe_pairs.h) and FillHolesByStereo (sfm/stereo_fill.h),
-// default options, are timed per keyframe with OpenCV held to one thread: the "time per keyframe
-// pair on one core" figure.
+// With fill_every, the keyframe fill that the pipeline runs (sfm/keyframe_filler.h: pair
+// selection, FillHolesByStereo, the carry) is timed per keyframe with OpenCV held to one thread:
+// the "time per keyframe pair on one core" figure.
 #pragma once
 
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "acquisition/frame_source.h"
-#include "apps/fill_stage.h"
+#include "pipeline/fill_stage.h"
 #include "registration/tracker.h"
 
 namespace gf {

@@ -8,13 +8,13 @@
 #include "apps/bench.h"
 #include "apps/capture.h"
 #include "apps/colmap.h"
-#include "apps/config.h"
 #include "apps/demo.h"
 #include "apps/info.h"
 #include "apps/interrupt.h"
 #include "apps/progress.h"
 #include "apps/reconstruct.h"
 #include "datasets/synth.h"
+#include "pipeline/settings.h"
 
 namespace gf {
 namespace {
@@ -109,16 +109,18 @@ void RegisterCommands(CLI::App& app) {
                   "accept a run that loses tracking on most frames (exit 0 with a warning)");
     cmd->callback([options, args, range, no_fill, sweep_all] {
       if (!options->config_file.empty())
-        ApplyConfigFile(options->config_file, &options->tracker, &options->fill_options);
-      if (*sweep_all) options->fill_options.stereo.plane_sweep_always = true;
-      options->fill = !*no_fill;
+        ApplyConfigFile(options->config_file, &options->pipeline.tracker,
+                        &options->pipeline.fill_options);
+      if (*sweep_all) options->pipeline.fill_options.stereo.plane_sweep_always = true;
+      options->pipeline.fill = !*no_fill;
       options->input = args->input;
       options->source = args->ToOptions();
-      options->source.load_color = options->tracker.use_features || options->fill;
-      if (!range->empty()) ParseFrameRange(*range, &options->first_frame, &options->end_frame);
+      options->source.load_color = options->pipeline.tracker.use_features || options->pipeline.fill;
+      if (!range->empty())
+        ParseFrameRange(*range, &options->pipeline.first_frame, &options->pipeline.end_frame);
       const InterruptHandler interrupt;  // Ctrl-C: stop, write the partial run, exit 130
       options->interrupt = interrupt.signal();
-      const ReconstructSummary s = RunReconstruct(*options);
+      const ReconstructionSummary s = RunReconstruct(*options);
       for (const std::string& w : s.warnings)
         std::fprintf(stderr, "warning: %s: %s\n", options->input.c_str(), w.c_str());
       std::cout << "reconstruct: " << s.BriefReport() << "; outputs in " << options->out_dir

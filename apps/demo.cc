@@ -13,11 +13,11 @@
 #include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
-#include "apps/config.h"
 #include "apps/info.h"
 #include "apps/progress.h"
 #include "apps/reconstruct.h"
 #include "datasets/synth.h"
+#include "pipeline/settings.h"
 
 namespace fs = std::filesystem;
 
@@ -87,7 +87,8 @@ void RunDemo(const DemoOptions& options) {
   ReconstructOptions reconstruct;
   reconstruct.config_file = options.config_file;
   if (!options.config_file.empty())
-    ApplyConfigFile(options.config_file, &reconstruct.tracker, &reconstruct.fill_options);
+    ApplyConfigFile(options.config_file, &reconstruct.pipeline.tracker,
+                    &reconstruct.pipeline.fill_options);
   std::error_code ec;
   fs::create_directories(options.out_dir, ec);
   if (ec) throw InputError(options.out_dir, "cannot create output folder: " + ec.message());
@@ -145,7 +146,7 @@ void RunDemo(const DemoOptions& options) {
   }
   reconstruct.input = scene_dir;
   reconstruct.out_dir = run_dir;
-  const ReconstructSummary run = RunReconstruct(reconstruct);
+  const ReconstructionSummary run = RunReconstruct(reconstruct);
   const TrajectoryErrorSummary ate =
       EvaluateTrajectory(ReadTumTrajectory((fs::path(scene_dir) / "groundtruth.txt").string()),
                          ReadTumTrajectory((fs::path(run_dir) / "trajectory.txt").string()));

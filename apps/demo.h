@@ -20,7 +20,7 @@ struct DemoOptions {
   std::string data_dir;     // "" = ../shared/datasets when present
   int frames = 30;          // frames of the glass scene
   std::string config_file;  // --config FILE: tracker and fill settings for the reconstruction
-                            // (apps/config.h), as `reconstruct --config` takes them
+                            // (pipeline/settings.h), as `reconstruct --config` takes them
   bool Check(std::string* message = nullptr) const;
 };
 

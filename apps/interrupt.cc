@@ -1,19 +1,35 @@
 #include "apps/interrupt.h"
 
 #include <csignal>
+#include <ctime>
 
 namespace gf {
 namespace {
 
 std::atomic<int> g_signal{0};
+std::atomic<long long> g_first_ns{0};
 using Handler = void (*)(int);
 Handler g_previous_int = SIG_DFL, g_previous_term = SIG_DFL;
 
+long long NowNs() {
+  timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);  // async-signal-safe
+  return t.tv_sec * 1000000000LL + t.tv_nsec;
+}
+
 extern "C" void OnSignal(int signal) {
-  g_signal = signal;
-  // A second Ctrl-C is the user insisting: the default action ends the process.
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  if (g_signal == 0) {
+    g_first_ns = NowNs();
+    g_signal = signal;
+    return;
+  }
+  // A second signal a second or more after the first is the user insisting: the default action
+  // ends the process. Sooner, it is the same signal delivered twice (timeout(1) and kill(1) send
+  // it to the process and to its group).
+  if (NowNs() - g_first_ns >= 1000000000LL) {
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
+  }
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // Ctrl-C (SIGINT) and SIGTERM for long commands: while an InterruptHandler lives, the first such
 // signal only sets a flag that the command polls (so it can stop cleanly and write what it has);
-// the handlers are then reset, so a second Ctrl-C ends the process at once.
+// a second one, a second or more later, ends the process at once.
 //
 // One handler at a time (it owns the process's signal dispositions); not thread-safe to create.
 #pragma once

@@ -237,6 +237,7 @@ RgbdFrame ToRgbdFrame(const SynthFrame& f, int index) {
   frame.color = f.color;
   ConvertDepth(f.raw_disparity, DepthConvention::KinectV1Raw11Bit(), {}, &frame.depth,
                &frame.hole_mask);
+  frame.median_return_m = MedianReturnDepth(f.raw_disparity, DepthConvention::KinectV1Raw11Bit());
   ClassifyShadows(frame.depth, SynthCamera().fx, ShadowOptions{}, &frame.hole_mask);
   return frame;
 }

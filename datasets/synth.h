@@ -89,7 +89,7 @@ SynthFrame RenderFrame(const Scene& scene, const Camera& camera, const SE3& worl
 
 // The frame as a frame source delivers it: colour, and metric depth with its hole mask converted
 // from the raw disparity exactly as a recorded raw Kinect frame is, projector shadows classified
-// (timestamps left to the caller).
+// (timestamps left to the caller), and the median depth of its returns.
 RgbdFrame ToRgbdFrame(const SynthFrame& frame, int index);
 
 struct SynthSummary {

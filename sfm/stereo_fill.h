@@ -105,9 +105,6 @@ struct StereoFillOptions {
   bool Check(std::string* message = nullptr) const;
 };
 
-// Where a pixel's depth came from (the `source` field of map.ply and of StereoFillResult).
-// kCarried: stereo depth of earlier keyframes carried into this one (sfm/fill_carry.h).
-enum class DepthSource : uint8_t { kNone = 0, kSensor = 1, kStereo = 2, kColmap = 3, kCarried = 4 };
 
 // Optional third keyframe for the photometric check.
 struct ThirdView {

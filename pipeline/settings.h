@@ -1,5 +1,5 @@
-// `glassfusion reconstruct|bench|demo --config FILE`: the tracker's and the fill's settings from
-// a JSON file.
+// The settings tree of a reconstruction: the tracker's and the fill's settings as JSON, for
+// report.json's config.settings and for `glassfusion reconstruct|bench|demo --config FILE`.
 //
 // The file holds any part of the tree that SettingsToJson writes (report.json's config.settings
 // holds the whole tree of a run, so a run's settings can be fed back):
@@ -10,14 +10,14 @@
 // Keys are the Options structs' field names. Settings the file leaves out keep their values.
 //
 // Usage:
-//   gf::ReconstructOptions options;  // throws InputError on any problem in the file:
+//   gf::ReconstructionOptions options;  // throws InputError on any problem in the file:
 //   gf::ApplyConfigFile("config.json", &options.tracker, &options.fill_options);
 #pragma once
 
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "apps/fill_stage.h"
+#include "pipeline/fill_stage.h"
 #include "registration/tracker.h"
 
 namespace gf {

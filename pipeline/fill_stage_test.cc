@@ -1,4 +1,4 @@
-#include "apps/fill_stage.h"
+#include "pipeline/fill_stage.h"
 
 #include <gtest/gtest.h>
 
@@ -40,7 +40,8 @@ TEST(FillStage, AKeyframeThatFailsIsSkippedAndTheRestAreFilled) {
   cv::cvtColor(c.frames[3].color, c.frames[3].color, cv::COLOR_BGR2GRAY);
   FillStageOptions options;
   options.pairs.lookahead = 2;
-  FillStage stage(synth::SynthCamera(), options, dir.path());
+  FolderRunSink sink(dir.path(), false);
+  FillStage stage(synth::SynthCamera(), options, &sink);
   for (size_t i = 0; i < c.frames.size(); ++i) EXPECT_TRUE(stage.Offer(c.frames[i], c.poses[i]));
   ASSERT_NO_THROW(stage.Finish());
   const nlohmann::ordered_json report = stage.Report();
@@ -61,7 +62,8 @@ TEST(FillStage, AKeyframeThatFailsIsSkippedAndTheRestAreFilled) {
 TEST(FillStage, CancelLeavesTheQueuedKeyframesUnfilledAndCounted) {
   testing::TempDir dir;
   const Capture c = Render(6);
-  FillStage stage(synth::SynthCamera(), {}, dir.path());
+  InMemoryRunSink sink;
+  FillStage stage(synth::SynthCamera(), {}, &sink);
   for (size_t i = 0; i < c.frames.size(); ++i) stage.Offer(c.frames[i], c.poses[i]);
   stage.Cancel();
   EXPECT_FALSE(stage.Offer(c.frames[0], c.poses[0]));  // stopped: refused and counted

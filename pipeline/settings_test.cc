@@ -1,15 +1,15 @@
-#include "apps/config.h"
+#include "pipeline/settings.h"
 
 #include <gtest/gtest.h>
 
 #include "acquisition/errors.h"
-#include "apps/reconstruct.h"
+#include "pipeline/reconstruction.h"
 
 namespace gf {
 namespace {
 
 // The problem InputError reports for `text`, or "" when ApplyConfig accepts it.
-std::string Problem(const std::string& text, ReconstructOptions* options) {
+std::string Problem(const std::string& text, ReconstructionOptions* options) {
   try {
     ApplyConfig(text, "run.json", &options->tracker, &options->fill_options);
   } catch (const InputError& e) {
@@ -20,7 +20,7 @@ std::string Problem(const std::string& text, ReconstructOptions* options) {
 }
 
 TEST(Config, SettingsListEveryStageWithItsValues) {
-  ReconstructOptions options;
+  ReconstructionOptions options;
   options.fill_options.stereo.plane_sweep.max_planes = 64;
   const auto j = SettingsToJson(options.tracker, options.fill_options);
   EXPECT_EQ(j["tracker"]["pyramid_levels"], 3);
@@ -36,7 +36,7 @@ TEST(Config, SettingsListEveryStageWithItsValues) {
 }
 
 TEST(Config, OverridesWhatTheFileSetsAndKeepsTheRest) {
-  ReconstructOptions options;
+  ReconstructionOptions options;
   options.fill_options.stereo.plane_sweep_always = true;  // e.g. --sweep-all, not in the file
   EXPECT_EQ(Problem(R"({"tracker": {"icp": {"iterations": [8, 4]}, "pyramid_levels": 2},
                         "fill": {"stereo": {"sgbm": {"block_size": 7}, "min_ncc": 1,
@@ -56,18 +56,18 @@ TEST(Config, OverridesWhatTheFileSetsAndKeepsTheRest) {
 }
 
 TEST(Config, ARunsSettingsReadBackGiveTheSameSettings) {
-  ReconstructOptions changed;
+  ReconstructionOptions changed;
   changed.tracker.use_features = false;
   changed.fill_options.pairs.lookahead = 4;
   changed.fill_options.stereo.max_ring_error = 0.025;
-  ReconstructOptions read;
+  ReconstructionOptions read;
   EXPECT_EQ(Problem(SettingsToJson(changed.tracker, changed.fill_options).dump(), &read), "");
   EXPECT_EQ(SettingsToJson(read.tracker, read.fill_options),
             SettingsToJson(changed.tracker, changed.fill_options));
 }
 
 TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
-  ReconstructOptions options;
+  ReconstructionOptions options;
   const auto before = SettingsToJson(options.tracker, options.fill_options);
   EXPECT_EQ(Problem(R"({"fill": {"stereo": {"blok_size": 5}}})", &options),
             "unknown setting 'fill.stereo.blok_size'");
@@ -106,7 +106,7 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
 }
 
 TEST(Config, MissingFileIsAnInputError) {
-  ReconstructOptions options;
+  ReconstructionOptions options;
   EXPECT_THROW(ApplyConfigFile("/nonexistent/config.json", &options.tracker, &options.fill_options),
                InputError);
 }

@@ -1,4 +1,4 @@
-#include "apps/config.h"
+#include "pipeline/settings.h"
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"

@@ -1,0 +1,169 @@
+#include "pipeline/fill_stage.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <thread>
+
+#include "acquisition/errors.h"
+#include "acquisition/stats.h"
+
+namespace gf {
+
+bool FillStageOptions::Check(std::string* message) const {
+  if (queue_capacity < 1) {
+    if (message) *message = "fill queue_capacity must be positive";
+    return false;
+  }
+  return Filler().Check(message);
+}
+
+FillStage::FillStage(const Camera& camera, const FillStageOptions& options, RunSink* sink)
+    : camera_(camera), options_(options), sink_(sink), queue_(options.queue_capacity) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+  GF_CHECK(sink != nullptr, "the fill stage needs a sink");
+  worker_.Start([this] { Run(); });
+}
+
+FillStage::~FillStage() {
+  Cancel();
+  worker_.Join();
+}
+
+bool FillStage::Offer(const RgbdFrame& frame, const SE3& world_from_camera) {
+  if (options_.drop_when_busy ? queue_.TryPush({frame, world_from_camera})
+                              : queue_.Push({frame, world_from_camera})) {
+    ++accepted_;
+    return true;
+  }
+  if (stopped_ || cancelled_) {
+    ++not_filled_;
+    spdlog::debug("fill: keyframe {} not filled (the fill stage has stopped)", KeyframeName(frame));
+  } else {
+    ++dropped_;
+    spdlog::debug("fill: keyframe {} dropped (stereo worker busy: {} keyframes queued)",
+                  KeyframeName(frame), options_.queue_capacity);
+  }
+  return false;
+}
+
+void FillStage::Finish(const std::function<bool()>& poll) {
+  queue_.Close();
+  while (!worker_.WaitFor(std::chrono::milliseconds(50)))
+    if (poll && poll()) Cancel();
+  worker_.Join();
+  if (worker_.error()) std::rethrow_exception(worker_.error());
+}
+
+void FillStage::Cancel() {
+  cancelled_ = true;
+  queue_.Close();
+}
+
+void FillStage::Run() {
+  struct Stopped {
+    std::atomic<bool>* flag;
+    ~Stopped() { *flag = true; }
+  } stopped{&stopped_};
+  KeyframeFiller filler(camera_, options_.Filler());
+  Offered item;
+  while (!cancelled_ && queue_.Pop(&item))
+    for (const FilledKeyframe& k : filler.Add(item.frame, item.world_from_camera)) Write(k);
+  if (!cancelled_)
+    for (const FilledKeyframe& k : filler.Flush([&] { return cancelled_.load(); })) Write(k);
+}
+
+void FillStage::Write(const FilledKeyframe& k) {
+  const KeyframeFill& r = k.record;
+  if (!r.failure.empty()) spdlog::warn("fill: keyframe {} skipped: {}", r.timestamp, r.failure);
+  if (!k.stereo.rectification.r_left.empty())
+    spdlog::debug("fill {}: {}", r.timestamp, k.stereo.rectification.BriefReport());
+  if (k.partner) spdlog::debug("fill {}: {}", r.timestamp, k.stereo.BriefReport());
+  if (r.carried_pixels + r.corrected_pixels > 0)
+    spdlog::debug("fill {}: {}", r.timestamp, k.fill.BriefReport());
+  sink_->WriteKeyframe(r.timestamp, k.key->frame, k.fill);  // a write failure stops the stage
+  std::lock_guard<std::mutex> lock(done_mutex_);
+  done_.push_back(r);
+  ++done_count_;
+}
+
+std::vector<KeyframeFill> FillStage::keyframes() const {
+  std::lock_guard<std::mutex> lock(done_mutex_);
+  return done_;
+}
+
+nlohmann::ordered_json FillStage::Report() const {
+  const std::vector<KeyframeFill> done = keyframes();
+  // Queued but never filled (the run stopped first), and offered after the stage stopped.
+  return FillReport(done, dropped_, accepted_ - static_cast<int>(done.size()) + not_filled_);
+}
+
+nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, int dropped,
+                                  int not_filled) {
+  using json = nlohmann::ordered_json;
+  long holes = 0, filled = 0, carried = 0, corrected = 0;
+  int paired = 0, rescaled = 0;
+  std::vector<double> errors, ms;
+  json list = json::array(), failed = json::array();
+  // How many pairs took which path, and why sideways pairs did not get SGBM.
+  json paths = {{"rectified_sgbm", 0},
+                {"plane_sweep_forward", 0},
+                {"plane_sweep_degenerate_rectification", 0},
+                {"plane_sweep_requested", 0},
+                {"none", 0}};
+  json refused = {{"valid_region", 0}, {"disparity_range", 0}};
+  auto name_or_null = [](const std::string& s) { return s.empty() ? json() : json(s); };
+  for (const KeyframeFill& k : keyframes) {
+    if (!k.failure.empty()) failed.push_back({{"timestamp", k.timestamp}, {"reason", k.failure}});
+    if (!k.path.empty()) paths[k.path] = paths.value(k.path, 0) + 1;
+    if (!k.sgbm_refused.empty()) refused[k.sgbm_refused] = refused.value(k.sgbm_refused, 0) + 1;
+    rescaled += k.sgbm_rescaled;
+    holes += k.hole_pixels;
+    filled += k.filled_pixels;
+    carried += k.carried_pixels;
+    corrected += k.corrected_pixels;
+    if (!k.partner.empty()) {
+      ++paired;
+      ms.push_back(k.ms);
+      if (k.filled_pixels > 0) errors.push_back(k.stereo_error_median_m);
+    }
+    list.push_back({{"timestamp", k.timestamp},
+                    {"partner", name_or_null(k.partner)},
+                    {"baseline_m", k.baseline_m},
+                    {"matches", k.matches},
+                    {"third", name_or_null(k.third)},
+                    {"third_view", k.third_view},
+                    {"method", k.method},
+                    {"path", name_or_null(k.path)},
+                    {"hole_pixels", k.hole_pixels},
+                    {"filled_pixels", k.filled_pixels},
+                    {"carried_pixels", k.carried_pixels},
+                    {"corrected_pixels", k.corrected_pixels},
+                    {"fill_rate", k.hole_pixels ? double(k.filled_pixels) / k.hole_pixels : 0.0},
+                    {"stereo_error_median_m", k.stereo_error_median_m},
+                    {"ms", k.ms},
+                    {"termination", k.termination}});
+  }
+  std::sort(ms.begin(), ms.end());
+  return {{"hole_pixels", holes},
+          {"filled_pixels", filled},
+          {"fill_rate", holes ? double(filled) / holes : 0.0},
+          {"carried_pixels", carried},
+          {"corrected_pixels", corrected},
+          {"stereo_error_median_m", errors.empty() ? json() : json(Median(errors))},
+          {"keyframes_filled", static_cast<int>(keyframes.size())},
+          {"keyframes_paired", paired},
+          {"keyframes_dropped", dropped},
+          {"keyframes_not_filled", not_filled},
+          {"failed_keyframes", failed},
+          {"pair_paths", paths},
+          {"sgbm_refused", refused},
+          {"sgbm_rescaled", rescaled},
+          {"pair_median_ms", ms.empty() ? json() : json(ms[ms.size() / 2])},
+          {"pair_max_ms", ms.empty() ? json() : json(ms.back())},
+          {"per_keyframe", list}};
+}
+
+}  // namespace gf

@@ -1,0 +1,99 @@
+// The stereo-fill stage of the reconstruction: fills every keyframe's depth holes in its own
+// thread while tracking goes on.
+//
+// The tracker hands each new keyframe to Offer(): keyframes go into a bounded queue; for live
+// input a keyframe that finds the queue full is dropped from the fill (and counted), so tracking
+// never waits on stereo; for recorded input Offer() waits for room (options.drop_when_busy). The
+// worker runs the KeyframeFiller (sfm/keyframe_filler.h: pairing, stereo, carrying earlier fills)
+// and writes each keyframe's images through the RunSink (run_sink.h).
+//
+// Failures are contained per keyframe: one whose features, pairing, stereo or carry throws is
+// skipped with a warning naming it and the reason (its files hold the sensor's depth alone),
+// listed in Report()'s "failed_keyframes", and the stage goes on. Only a keyframe that cannot be
+// written stops the stage (Finish() rethrows it). Cancel() stops it early: what is queued is left
+// unfilled and counted.
+//
+// Thread-safety: Offer() from one producer thread; Cancel() and progress() from any thread;
+// Finish() and Report() from the owner's.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "acquisition/camera.h"
+#include "acquisition/rgbd_frame.h"
+#include "acquisition/se3.h"
+#include "pipeline/bounded_queue.h"
+#include "pipeline/run_sink.h"
+#include "pipeline/stage_thread.h"
+#include "sfm/keyframe_filler.h"
+
+namespace gf {
+
+struct FillStageOptions {
+  PairSelectionOptions pairs;
+  StereoFillOptions stereo;
+  FillCarryOptions carry;
+  int queue_capacity = 16;  // keyframes waiting for the worker
+  // Live input: a keyframe arriving at a full queue is dropped from the fill (and counted), so
+  // tracking never waits. Recorded input (false): Offer() waits for room instead, so that every
+  // keyframe is filled; nothing is lost by waiting on a file.
+  bool drop_when_busy = true;
+  KeyframeFillerOptions Filler() const { return {pairs, stereo, carry}; }
+  bool Check(std::string* message = nullptr) const;
+};
+
+// report.json's "fill" object from the keyframes' records.
+nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, int dropped,
+                                  int not_filled);
+
+class FillStage {
+ public:
+  // `sink` must outlive the stage.
+  FillStage(const Camera& camera, const FillStageOptions& options, RunSink* sink);
+  ~FillStage();  // cancels and joins if Finish() was not called
+  FillStage(const FillStage&) = delete;
+  FillStage& operator=(const FillStage&) = delete;
+
+  // False when the keyframe was dropped (queue full and drop_when_busy, or the stage stopped).
+  bool Offer(const RgbdFrame& frame, const SE3& world_from_camera);
+  // Processes what is queued, pairs the last keyframes, joins the worker. Rethrows a worker error
+  // (a keyframe that could not be written). While it waits, `poll` (may be empty) is called
+  // every 50 ms; when it returns true the rest is cancelled.
+  void Finish(const std::function<bool()>& poll = {});
+  // Stops early: the keyframe in progress is finished, the queued ones are not filled.
+  void Cancel();
+  // Keyframes offered and keyframes done so far (any thread).
+  int offered() const { return accepted_; }
+  int done() const { return done_count_; }
+  nlohmann::ordered_json Report() const;
+  std::vector<KeyframeFill> keyframes() const;
+
+ private:
+  struct Offered {
+    RgbdFrame frame;
+    SE3 world_from_camera;
+  };
+  void Run();
+  void Write(const FilledKeyframe& k);
+
+  Camera camera_;
+  FillStageOptions options_;
+  RunSink* sink_;
+  BoundedQueue<Offered> queue_;
+  mutable std::mutex done_mutex_;
+  std::vector<KeyframeFill> done_;  // written by the worker
+  std::atomic<int> done_count_{0};
+  std::atomic<int> accepted_{0};  // keyframes Offer() queued
+  int dropped_ = 0;               // live input: keyframes that found the queue full (producer)
+  int not_filled_ = 0;            // offered after the stage stopped (producer)
+  std::atomic<bool> cancelled_{false};
+  std::atomic<bool> stopped_{false};  // the worker ended (error or Cancel())
+  StageThread worker_;
+};
+
+}  // namespace gf

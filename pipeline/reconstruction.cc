@@ -1,0 +1,190 @@
+#include "pipeline/reconstruction.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+#include "acquisition/errors.h"
+#include "pipeline/settings.h"
+#include "pipeline/stages.h"
+
+namespace gf {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using json = nlohmann::ordered_json;
+
+json StageStats(std::vector<double> ms) {
+  if (ms.empty()) return {{"median_ms", nullptr}, {"max_ms", nullptr}, {"count", 0}};
+  std::sort(ms.begin(), ms.end());
+  return {{"median_ms", ms[ms.size() / 2]}, {"max_ms", ms.back()}, {"count", ms.size()}};
+}
+
+// report.json (DESIGN.md's keys).
+json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
+                const TrackingRecord& tracking, const FillStage* fill,
+                const ReconstructionSummary& summary) {
+  json report;
+  report["complete"] = summary.complete;
+  if (!summary.complete) report["stopped_because"] = summary.stopped_because;
+  report["input"] = {{"path", options.input_path.empty() ? source.Input() : options.input_path},
+                     {"kind", source.Kind()},
+                     {"first_frame", options.first_frame},
+                     {"end_frame", options.end_frame}};
+  report["config"] = {{"tracker", "frame_to_keyframe_icp"},
+                      {"stereo_fill", options.fill},
+                      {"threads", options.fill ? "reader + tracker + stereo" : "reader + tracker"},
+                      {"hardware_concurrency", std::thread::hardware_concurrency()},
+                      {"file", options.config_file.empty() ? json() : json(options.config_file)},
+                      {"settings", SettingsToJson(options.tracker, options.fill_options)}};
+  report["frames"] = summary.frames;
+  report["fps"] = summary.fps;
+  report["seconds"] = summary.seconds;
+  report["stages"] = {{"read", StageStats(tracking.read_ms)},
+                      {"track", StageStats(tracking.track_ms)}};
+  if (fill) {
+    std::vector<double> stereo_ms;  // per keyframe: stereo, validation and carry
+    for (const KeyframeFill& k : fill->keyframes())
+      if (!k.partner.empty()) stereo_ms.push_back(k.ms);
+    report["stages"]["stereo"] = StageStats(stereo_ms);
+  }
+  report["keyframes"] = summary.keyframes;
+  report["tracking"] = {{"lost_frames", summary.lost}};
+  report["loops"] = nullptr;  // loop closure: not built yet
+  report["fill"] = fill ? fill->Report() : json();
+  report["surfels"] = nullptr;  // surfel fusion: not built yet
+  report["warnings"] = summary.warnings;
+  return report;
+}
+
+std::string Describe(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "unknown error";
+  }
+}
+
+}  // namespace
+
+bool ReconstructionOptions::Check(std::string* message) const {
+  if (first_frame < 0 || (end_frame >= 0 && end_frame <= first_frame)) {
+    if (message) *message = "need 0 <= first_frame < end_frame";
+    return false;
+  }
+  if (queue_capacity < 1) {
+    if (message) *message = "queue_capacity must be positive";
+    return false;
+  }
+  return tracker.Check(message) && (!fill || fill_options.Check(message));
+}
+
+std::string ReconstructionSummary::BriefReport() const {
+  char buffer[240];
+  std::snprintf(buffer, sizeof(buffer),
+                "%s%d frames in %.1f s (%.1f fps), %d keyframes, %d lost, %ld of %ld keyframe "
+                "hole pixels filled",
+                complete ? "" : "stopped early: ", frames, seconds, fps, keyframes, lost,
+                filled_pixels, hole_pixels);
+  return buffer;
+}
+
+Reconstruction::Reconstruction(ReconstructionOptions options) : options_(std::move(options)) {
+  std::string problem;
+  if (!options_.Check(&problem)) throw InputError("settings", problem);
+}
+
+ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
+                                          const ReconstructionCallbacks& callbacks) {
+  const auto start = Clock::now();
+  ReconstructionProgress progress;
+  progress.total = source.FrameCount();
+  if (progress.total) {
+    const int last =
+        options_.end_frame >= 0 ? std::min(*progress.total, options_.end_frame) : *progress.total;
+    progress.total = std::max(0, last - options_.first_frame);
+  }
+  std::unique_ptr<FillStage> fill;
+  if (options_.fill) {
+    FillStageOptions fill_options = options_.fill_options;
+    fill_options.drop_when_busy = !progress.total.has_value();  // live: tracking never waits
+    fill = std::make_unique<FillStage>(source.camera(), fill_options, sink);
+  }
+  BoundedQueue<FrameItem> queue(options_.queue_capacity);
+  ReadStage reader(&source, options_.first_frame, options_.end_frame, &queue);
+  TrackStage tracker(source, options_.tracker,
+                     options_.camera_file.empty() ? source.Input() : options_.camera_file, &queue,
+                     fill.get());
+  std::string stop_reason;
+  // Progress and stop requests, from this thread; true once a stop was asked for.
+  auto poll = [&] {
+    progress.frames = tracker.frames();
+    if (fill)
+      progress.keyframes_offered = fill->offered(), progress.keyframes_filled = fill->done();
+    if (callbacks.progress) callbacks.progress(progress);
+    if (stop_reason.empty() && callbacks.stop) stop_reason = callbacks.stop();
+    return !stop_reason.empty();
+  };
+  while (!tracker.WaitFor(std::chrono::milliseconds(50)))
+    if (poll()) {
+      tracker.Stop();
+      reader.Stop();
+    }
+  reader.Stop();
+  tracker.Join();
+  reader.Join();
+  progress.tracking_done = true;
+  std::exception_ptr error = tracker.error();
+  if (fill) {
+    // The keyframes tracked before an error are valid: the fill finishes them, unless a stop is
+    // asked for.
+    try {
+      fill->Finish(poll);
+    } catch (...) {
+      if (!error) error = std::current_exception();
+    }
+  }
+  const TrackingRecord& tracking = tracker.record();
+  if (!error && stop_reason.empty() && tracking.frames == 0)
+    error = std::make_exception_ptr(InputError(source.Input(), "no frames in the selected range"));
+
+  ReconstructionSummary summary;
+  summary.complete = !error && stop_reason.empty();
+  summary.stopped_because = error ? Describe(error) : stop_reason;
+  summary.frames = tracking.frames;
+  summary.lost = tracking.lost;
+  summary.keyframes = tracking.keyframes;
+  summary.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  summary.fps = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
+  if (fill) {
+    const json f = fill->Report();
+    summary.hole_pixels = f["hole_pixels"];
+    summary.filled_pixels = f["filled_pixels"];
+    for (const auto& k : f["failed_keyframes"])
+      summary.warnings.push_back("keyframe " + k["timestamp"].get<std::string>() +
+                                 " not filled: " + k["reason"].get<std::string>());
+  }
+  summary.most_lost = summary.frames >= 2 && summary.lost > kMostFramesLost * summary.frames;
+  if (summary.most_lost)
+    summary.warnings.push_back("tracking was lost on " + std::to_string(summary.lost) + " of " +
+                               std::to_string(summary.frames) + " frames");
+  summary.report = MakeReport(options_, source, tracking, fill.get(), summary);
+  sink->WriteTrajectory(tracking.trajectory);
+  // The camera of the run's images (frames arrive registered to colour; keyframe depth PNGs are
+  // millimetres), for colmap-export and other readers of the run folder.
+  CameraFile run_camera;
+  run_camera.camera = source.camera();
+  run_camera.depth_scale = 1000.0;
+  sink->WriteCamera(run_camera);
+  sink->WriteReport(summary.report);
+  poll();
+  if (error) std::rethrow_exception(error);
+  return summary;
+}
+
+}  // namespace gf

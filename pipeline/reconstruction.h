@@ -1,0 +1,94 @@
+// The reconstruction as a library: read, track and fill stages, each in its own thread, joined
+// by bounded queues (stages.h, fill_stage.h), over any FrameSource, writing through a RunSink
+// (run_sink.h), reporting progress through callbacks. Loop closure and surfel fusion join as
+// stages of their own.
+//
+// No run is lost. A keyframe whose fill fails is skipped and counted; the run goes on. When the
+// run must stop (a frame that cannot be read, an implausible depth scale, a keyframe that cannot
+// be written, or callbacks.stop returning a reason such as "interrupted by SIGINT"), it still
+// writes the trajectory of the frames processed, the camera and the report with "complete":
+// false and "stopped_because"; then Run() rethrows what stopped it (or, for a stop request,
+// returns with summary.complete false).
+//
+// Usage (as BAD SLAM's and COLMAP's controllers):
+//   gf::Reconstruction reconstruction(options);
+//   gf::FolderRunSink sink("run", /*replace=*/false);
+//   gf::ReconstructionSummary s = reconstruction.Run(*source, &sink, callbacks);
+//
+// Thread-safety: Run() blocks the calling thread, from which every callback is called.
+#pragma once
+
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "acquisition/frame_source.h"
+#include "pipeline/fill_stage.h"
+#include "pipeline/run_sink.h"
+#include "registration/tracker.h"
+
+namespace gf {
+
+struct ReconstructionOptions {
+  int first_frame = 0;     // frames before this are read but not processed
+  int end_frame = -1;      // ... and reading stops here (-1 = to the end)
+  int queue_capacity = 8;  // frames buffered between reader and tracker
+  TrackerOptions tracker;
+  bool fill = true;  // stereo hole filling of keyframes
+  FillStageOptions fill_options;
+  // The file an implausible depth scale is blamed on (the camera.json in use); "" = the input.
+  std::string camera_file;
+  // Written into the report (config.file, input.path), not read.
+  std::string config_file, input_path;
+  bool Check(std::string* message = nullptr) const;
+};
+
+struct ReconstructionProgress {
+  int frames = 0;              // tracked so far
+  std::optional<int> total;    // frames expected, when the source knows
+  int keyframes_offered = 0;   // handed to the fill
+  int keyframes_filled = 0;    // filled and written
+  bool tracking_done = false;  // the fill is finishing the last keyframes
+};
+
+struct ReconstructionCallbacks {
+  // About every 50 ms while the run goes on, and once at the end.
+  std::function<void(const ReconstructionProgress&)> progress;
+  // Asked as often: a non-empty reason stops the run (e.g. "interrupted by SIGINT").
+  std::function<std::string()> stop;
+};
+
+// A run that loses tracking on more than this share of its frames has no usable trajectory.
+constexpr double kMostFramesLost = 0.5;
+
+struct ReconstructionSummary {
+  bool complete = false;
+  std::string stopped_because;  // when not complete
+  int frames = 0;
+  int lost = 0;
+  int keyframes = 0;
+  long hole_pixels = 0;  // in keyframes handed to the fill
+  long filled_pixels = 0;
+  double seconds = 0;      // the whole run, the fill's tail after tracking included
+  double fps = 0;          // frames / seconds
+  bool most_lost = false;  // tracking was lost on more than kMostFramesLost of the frames
+  std::vector<std::string> warnings;  // also in the report
+  nlohmann::ordered_json report;      // report.json as written
+  std::string BriefReport() const;
+};
+
+class Reconstruction {
+ public:
+  // Throws InputError when options.Check() fails.
+  explicit Reconstruction(ReconstructionOptions options);
+  // Runs over `source`, writing to `sink`. See the file comment for how a run ends.
+  ReconstructionSummary Run(FrameSource& source, RunSink* sink,
+                            const ReconstructionCallbacks& callbacks = {});
+
+ private:
+  ReconstructionOptions options_;
+};
+
+}  // namespace gf

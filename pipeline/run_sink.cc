@@ -1,0 +1,126 @@
+#include "pipeline/run_sink.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "acquisition/errors.h"
+#include "acquisition/file_util.h"
+#include "acquisition/image_io.h"
+
+namespace fs = std::filesystem;
+
+namespace gf {
+namespace {
+
+cv::Mat ToMillimetres(const cv::Mat& depth_m) {
+  cv::Mat mm(depth_m.size(), CV_16UC1);
+  for (int y = 0; y < depth_m.rows; ++y)
+    for (int x = 0; x < depth_m.cols; ++x) {
+      const double d = depth_m.at<float>(y, x) * 1000.0;
+      mm.at<uint16_t>(y, x) = d > 0 ? static_cast<uint16_t>(std::min(65535.0, std::round(d))) : 0;
+    }
+  return mm;
+}
+
+bool LooksLikeRun(const fs::path& dir) {
+  for (const char* name : {"report.json", "trajectory.txt", "keyframes", "camera.json"})
+    if (fs::exists(dir / name)) return true;
+  return false;
+}
+
+}  // namespace
+
+cv::Mat FillOverlay(const cv::Mat& color, const CarriedFillResult& fill) {
+  cv::Mat out = color.clone();
+  for (int y = 0; y < out.rows; ++y)
+    for (int x = 0; x < out.cols; ++x) {
+      cv::Vec3b& p = out.at<cv::Vec3b>(y, x);
+      cv::Vec3d tint;
+      double w;
+      if (fill.fill_mask.at<uint8_t>(y, x)) {
+        tint = fill.source.at<uint8_t>(y, x) == static_cast<uint8_t>(DepthSource::kCarried)
+                   ? cv::Vec3d(255, 255, 0)
+                   : cv::Vec3d(0, 255, 0);
+        w = 0.35 + 0.4 * fill.confidence.at<float>(y, x);
+      } else if (!(fill.filled_depth.at<float>(y, x) > 0)) {
+        tint = {255, 0, 255};
+        w = 0.35;
+      } else {
+        continue;
+      }
+      for (int c = 0; c < 3; ++c) p[c] = cv::saturate_cast<uint8_t>((1 - w) * p[c] + w * tint[c]);
+    }
+  return out;
+}
+
+FolderRunSink::FolderRunSink(std::string out_dir, bool replace) : out_dir_(std::move(out_dir)) {
+  std::error_code ec;
+  const fs::path dir(out_dir_);
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw InputError(out_dir_, "exists and is not a folder");
+  if (fs::is_directory(dir, ec) && !fs::is_empty(dir, ec)) {
+    if (!replace)
+      throw InputError(out_dir_,
+                       "is not empty (an earlier run?); choose a new folder, or --force to "
+                       "replace the run in it");
+    if (!LooksLikeRun(dir))
+      throw InputError(out_dir_,
+                       "is not empty and holds no run (no report.json, trajectory.txt or "
+                       "keyframes/); --force replaces only runs");
+    for (const auto& entry : fs::directory_iterator(dir, ec)) fs::remove_all(entry.path(), ec);
+    if (ec) throw InputError(out_dir_, "cannot remove the earlier run: " + ec.message());
+  }
+  fs::create_directories(dir, ec);
+  if (ec) throw InputError(out_dir_, "cannot create output folder: " + ec.message());
+}
+
+void FolderRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& frame,
+                                  const CarriedFillResult& fill) {
+  const fs::path folder = fs::path(out_dir_) / "keyframes";
+  std::error_code ec;
+  fs::create_directories(folder, ec);  // with the first keyframe: a run without fill has none
+  if (ec) throw InputError(folder.string(), "cannot create folder: " + ec.message());
+  const std::string base = (folder / name).string();
+  WriteImage(base + ".hole_mask.png", frame.hole_mask);
+  WriteImage(base + ".depth_filled.png", ToMillimetres(fill.filled_depth));
+  if (frame.color.type() == CV_8UC3 && frame.color.size() == frame.depth.size()) {
+    WriteImage(base + ".fill_overlay.png", FillOverlay(frame.color, fill));
+    WriteImage(base + ".color.png", frame.color);  // for colmap-export
+  }
+}
+
+void FolderRunSink::WriteTrajectory(const Trajectory& trajectory) {
+  WriteTumTrajectory((fs::path(out_dir_) / "trajectory.txt").string(), trajectory);
+}
+
+void FolderRunSink::WriteCamera(const CameraFile& camera) {
+  SaveCameraFile((fs::path(out_dir_) / "camera.json").string(), camera);
+}
+
+void FolderRunSink::WriteReport(const nlohmann::ordered_json& report) {
+  WriteTextFileAtomically((fs::path(out_dir_) / "report.json").string(), report.dump(2) + "\n");
+}
+
+void InMemoryRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& frame,
+                                    const CarriedFillResult& fill) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  keyframes[name] = {frame, fill};
+}
+
+void InMemoryRunSink::WriteTrajectory(const Trajectory& t) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  trajectory = t;
+}
+
+void InMemoryRunSink::WriteCamera(const CameraFile& c) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  camera = c;
+}
+
+void InMemoryRunSink::WriteReport(const nlohmann::ordered_json& r) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  report = r;
+}
+
+}  // namespace gf

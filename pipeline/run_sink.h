@@ -1,0 +1,90 @@
+// Where a reconstruction's outputs go: a run folder (DESIGN.md's layout) or memory (for tests).
+//
+// A run folder holds trajectory.txt (TUM format, world_from_camera, the input's depth
+// timestamps), camera.json (the camera of the run's images; keyframe depth is millimetres),
+// report.json and keyframes/ (names in DESIGN.md):
+//   <ts>.hole_mask.png     8-bit HoleCode (0 valid, 1 no return, 2 out of range, 3 shadow)
+//   <ts>.depth_filled.png  16-bit millimetres: sensor depth plus filled pixels, 0 still empty
+//   <ts>.fill_overlay.png  colour image, filled pixels green (cyan: carried from earlier
+//                          keyframes; brighter = more confident), holes still empty magenta
+//   <ts>.color.png         the keyframe's colour image (lossless; colmap-export uses it)
+// Every file is written atomically (a temporary name, then renamed), so an interrupted run never
+// leaves a truncated file that looks complete.
+//
+// Thread-safety: WriteKeyframe may be called from one thread while another calls the rest.
+#pragma once
+
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "acquisition/camera.h"
+#include "acquisition/rgbd_frame.h"
+#include "acquisition/trajectory.h"
+#include "sfm/fill_carry.h"
+
+namespace gf {
+
+class RunSink {
+ public:
+  virtual ~RunSink() = default;
+  // A keyframe's hole mask, filled depth (fill.filled_depth, metres) and, when it has colour, its
+  // overlay and colour image. `name` is KeyframeName(frame). Throws InputError when it cannot be
+  // written.
+  virtual void WriteKeyframe(const std::string& name, const RgbdFrame& frame,
+                             const CarriedFillResult& fill) = 0;
+  virtual void WriteTrajectory(const Trajectory& trajectory) = 0;
+  virtual void WriteCamera(const CameraFile& camera) = 0;
+  virtual void WriteReport(const nlohmann::ordered_json& report) = 0;
+  // Where the outputs go, for messages ("memory" for the in-memory sink).
+  virtual std::string Where() const = 0;
+};
+
+// A run folder. The constructor prepares it: it must be new or empty, or hold an earlier run and
+// `replace` be set, in which case its contents are removed first (a folder that holds no run,
+// i.e. no report.json, trajectory.txt, camera.json or keyframes/, is never emptied). Throws
+// InputError otherwise.
+class FolderRunSink : public RunSink {
+ public:
+  FolderRunSink(std::string out_dir, bool replace);
+  void WriteKeyframe(const std::string& name, const RgbdFrame& frame,
+                     const CarriedFillResult& fill) override;
+  void WriteTrajectory(const Trajectory& trajectory) override;
+  void WriteCamera(const CameraFile& camera) override;
+  void WriteReport(const nlohmann::ordered_json& report) override;
+  std::string Where() const override { return out_dir_; }
+
+ private:
+  std::string out_dir_;
+};
+
+// Keeps everything in memory, for tests.
+class InMemoryRunSink : public RunSink {
+ public:
+  struct Keyframe {
+    RgbdFrame frame;
+    CarriedFillResult fill;
+  };
+  void WriteKeyframe(const std::string& name, const RgbdFrame& frame,
+                     const CarriedFillResult& fill) override;
+  void WriteTrajectory(const Trajectory& trajectory) override;
+  void WriteCamera(const CameraFile& camera) override;
+  void WriteReport(const nlohmann::ordered_json& report) override;
+  std::string Where() const override { return "memory"; }
+
+  // Read after the run.
+  std::map<std::string, Keyframe> keyframes;
+  Trajectory trajectory;
+  CameraFile camera;
+  nlohmann::ordered_json report;
+
+ private:
+  std::mutex mutex_;
+};
+
+// The overlay written as <ts>.fill_overlay.png (see above).
+cv::Mat FillOverlay(const cv::Mat& color, const CarriedFillResult& fill);
+
+}  // namespace gf

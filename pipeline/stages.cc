@@ -1,0 +1,117 @@
+#include "pipeline/stages.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+
+#include "acquisition/errors.h"
+#include "acquisition/stats.h"
+
+namespace gf {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+// Frames whose depth decides whether the depth scale is plausible (DepthScaleProblem).
+constexpr size_t kDepthScaleFrames = 10;
+
+}  // namespace
+
+ReadStage::ReadStage(FrameSource* source, int first_frame, int end_frame,
+                     BoundedQueue<FrameItem>* queue)
+    : source_(source), first_frame_(first_frame), end_frame_(end_frame), queue_(queue) {
+  thread_.Start([this] { Run(); });
+}
+
+ReadStage::~ReadStage() {
+  Stop();
+  thread_.Join();
+}
+
+void ReadStage::Stop() {
+  stop_ = true;
+  queue_->Close();
+}
+
+void ReadStage::Run() {
+  struct CloseAtEnd {
+    BoundedQueue<FrameItem>* queue;
+    ~CloseAtEnd() { queue->Close(); }
+  } close{queue_};
+  for (int index = 0; !stop_; ++index) {
+    FrameItem item;
+    const auto t0 = Clock::now();
+    try {
+      if (end_frame_ >= 0 && index >= end_frame_) break;
+      if (!source_->Next(&item.frame)) break;
+    } catch (...) {
+      item.error = std::current_exception();
+      queue_->Push(std::move(item));
+      break;
+    }
+    item.read_ms = Ms(t0, Clock::now());
+    if (index < first_frame_) continue;
+    if (!queue_->Push(std::move(item))) break;
+  }
+}
+
+TrackStage::TrackStage(const FrameSource& source, const TrackerOptions& options,
+                       const std::string& camera_file, BoundedQueue<FrameItem>* queue,
+                       FillStage* fill)
+    : source_(source), options_(options), camera_file_(camera_file), queue_(queue), fill_(fill) {
+  thread_.Start([this] { Run(); });
+}
+
+TrackStage::~TrackStage() {
+  Stop();
+  thread_.Join();
+}
+
+void TrackStage::Stop() { stop_ = true; }
+
+void TrackStage::Run() {
+  FrameToKeyframeTracker tracker(source_.camera(), options_);
+  FrameItem item;
+  while (!stop_ && queue_->Pop(&item)) {
+    if (item.error) std::rethrow_exception(item.error);
+    CheckDepthScale(item.frame);
+    record_.read_ms.push_back(item.read_ms);
+    Track(item.frame, &tracker);
+    record_.keyframes = tracker.keyframes();
+    ++frames_;
+  }
+}
+
+void TrackStage::Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker) {
+  const auto t0 = Clock::now();
+  const TrackingResult r = tracker->Track(frame);
+  record_.track_ms.push_back(Ms(t0, Clock::now()));
+  if (r.status == TrackingStatus::kLost) {
+    ++record_.lost;
+    spdlog::debug("frame {} ({}): tracking lost: {}", frame.index, frame.timestamp_text,
+                  r.BriefReport());
+  }
+  if (fill_ && r.new_keyframe && r.status != TrackingStatus::kLost) {
+    if (frame.color.empty())
+      throw InputError(frame.depth_path.empty() ? source_.Input() : frame.depth_path,
+                       "the stereo fill needs colour images (or --no-fill)");
+    fill_->Offer(frame, r.world_from_camera);
+  }
+  record_.trajectory.push_back({frame.timestamp, frame.timestamp_text, r.world_from_camera});
+  ++record_.frames;
+}
+
+void TrackStage::CheckDepthScale(const RgbdFrame& frame) {
+  std::vector<double>& medians = record_.median_depths;
+  if (frame.median_return_m <= 0 || medians.size() >= kDepthScaleFrames) return;
+  medians.push_back(frame.median_return_m);
+  if (medians.size() < kDepthScaleFrames) return;
+  const std::string problem = DepthScaleProblem(Median(medians), source_.depth_convention());
+  if (!problem.empty()) throw InputError(camera_file_, problem);
+}
+
+}  // namespace gf

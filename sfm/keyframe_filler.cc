@@ -1,0 +1,140 @@
+#include "sfm/keyframe_filler.h"
+
+#include <chrono>
+#include <opencv2/core.hpp>
+
+#include "acquisition/errors.h"
+
+namespace gf {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+}  // namespace
+
+bool KeyframeFillerOptions::Check(std::string* message) const {
+  auto fail = [&](const char* m) {
+    if (message) *message = m;
+    return false;
+  };
+  if (pairs.max_near_disparity_px > stereo.sgbm.num_disparities)
+    return fail("pairs.max_near_disparity_px exceeds stereo.sgbm.num_disparities");
+  // Pair selection picks a partner by the method that will fill it (its disparity limits differ
+  // for forward pairs); the stereo must classify the pair the same way.
+  if (pairs.epipole_margin_px != stereo.epipole_margin_px)
+    return fail("pairs.epipole_margin_px and stereo.epipole_margin_px must be equal");
+  return pairs.Check(message) && stereo.Check(message) && carry.Check(message);
+}
+
+std::string KeyframeName(const RgbdFrame& frame) {
+  return frame.timestamp_text.empty() ? std::to_string(frame.index) : frame.timestamp_text;
+}
+
+KeyframeFiller::KeyframeFiller(const Camera& camera, const KeyframeFillerOptions& options)
+    : camera_(camera),
+      options_(options),
+      scheduler_(camera, options.pairs),
+      carrier_(camera, options.carry) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+}
+
+std::vector<FilledKeyframe> KeyframeFiller::Add(const RgbdFrame& frame,
+                                                const SE3& world_from_camera) {
+  const auto t0 = Clock::now();
+  std::vector<StereoJob> jobs;
+  try {
+    jobs = scheduler_.Add(frame, world_from_camera);
+  } catch (const std::exception& e) {
+    // Its features could not be computed: it joins no pair, and keeps its sensor depth.
+    auto key = std::make_shared<StereoKeyframe>();
+    key->frame = frame;
+    key->world_from_camera = world_from_camera;
+    return {Failed(key, std::string("features: ") + e.what())};
+  }
+  last_pairing_ms_ = Ms(t0, Clock::now());
+  std::vector<FilledKeyframe> out;
+  for (const StereoJob& job : jobs) out.push_back(Fill(job));
+  return out;
+}
+
+std::vector<FilledKeyframe> KeyframeFiller::Flush(const std::function<bool()>& stop) {
+  std::vector<FilledKeyframe> out;
+  for (const StereoJob& job : scheduler_.Flush()) {
+    if (stop && stop()) break;
+    out.push_back(Fill(job));
+  }
+  return out;
+}
+
+FilledKeyframe KeyframeFiller::Fill(const StereoJob& job) {
+  const RgbdFrame& key1 = job.key1->frame;
+  FilledKeyframe out;
+  out.key = job.key1;
+  KeyframeFill& k = out.record;
+  k.timestamp = KeyframeName(key1);
+  k.hole_pixels = cv::countNonZero(key1.hole_mask);
+  try {
+    if (!job.error.empty()) throw std::runtime_error(job.error);
+    const auto t0 = Clock::now();
+    if (job.key2) {
+      ThirdView third;
+      if (job.third) third = {&job.third->frame, job.choice.third_pose.key1_from_key2};
+      out.partner = job.key2;
+      out.stereo =
+          FillHolesByStereo(key1, job.key2->frame, camera_, job.choice.partner_pose.key1_from_key2,
+                            options_.stereo, third);
+      const StereoFillResult& r = out.stereo;
+      k.partner = KeyframeName(job.key2->frame);
+      if (job.third) k.third = KeyframeName(job.third->frame);
+      k.method = r.method;
+      k.path = r.path;
+      k.sgbm_refused = r.sgbm_refused;
+      k.sgbm_rescaled = r.rectification.usable && r.rectification.rescaled;
+      k.baseline_m = job.choice.baseline_m;
+      k.matches = job.choice.matches;
+      k.third_view = r.third_view_used;
+      k.termination = r.termination;
+      k.stereo_error_median_m = r.stereo_error_median_m;
+    } else {
+      k.termination = job.choice.reason;
+    }
+    const auto t1 = Clock::now();
+    // The earlier keyframes' own fills, moved into this keyframe.
+    out.fill = carrier_.Next(key1, job.key1->world_from_camera, job.key2 ? &out.stereo : nullptr);
+    out.stereo_ms = Ms(t0, t1);
+    out.carry_ms = Ms(t1, Clock::now());
+  } catch (const std::exception& e) {
+    return Failed(job.key1, e.what());
+  }
+  k.filled_pixels = out.fill.filled_pixels;
+  k.carried_pixels = out.fill.carried_pixels;
+  k.corrected_pixels = out.fill.corrected_pixels;
+  k.ms = out.stereo_ms + out.carry_ms;
+  return out;
+}
+
+FilledKeyframe KeyframeFiller::Failed(std::shared_ptr<const StereoKeyframe> key,
+                                      const std::string& reason) const {
+  FilledKeyframe out;
+  const RgbdFrame& frame = key->frame;
+  out.key = std::move(key);
+  out.record.timestamp = KeyframeName(frame);
+  const bool well_formed = frame.depth.type() == CV_32FC1 && frame.hole_mask.type() == CV_8UC1 &&
+                           frame.depth.size() == frame.hole_mask.size();
+  out.record.hole_pixels = well_formed ? cv::countNonZero(frame.hole_mask) : 0;
+  out.record.termination = "failed";
+  out.record.failure = reason;
+  CarriedFillResult& sensor_only = out.fill;
+  sensor_only.filled_depth = frame.depth;
+  sensor_only.fill_mask = cv::Mat::zeros(frame.depth.size(), CV_8UC1);
+  sensor_only.source = cv::Mat::zeros(frame.depth.size(), CV_8UC1);
+  sensor_only.confidence = cv::Mat::zeros(frame.depth.size(), CV_32FC1);
+  return out;
+}
+
+}  // namespace gf
