@@ -19,6 +19,12 @@ bool FillStageOptions::Check(std::string* message) const {
   return Filler().Check(message);
 }
 
+KeyframeFillerOptions FillStageOptions::Filler() const {
+  KeyframeFillerOptions f{pairs, stereo, carry};
+  f.pairs.geometry = f.stereo.geometry = geometry;
+  return f;
+}
+
 FillStage::FillStage(const Camera& camera, const FillStageOptions& options, RunSink* sink)
     : camera_(camera), options_(options), sink_(sink), queue_(options.queue_capacity) {
   std::string problem;

@@ -35,6 +35,8 @@
 namespace gf {
 
 struct FillStageOptions {
+  PairGeometryOptions geometry;  // for pair selection and stereo alike (their own copies are set
+                                 // from this one)
   PairSelectionOptions pairs;
   StereoFillOptions stereo;
   FillCarryOptions carry;
@@ -43,7 +45,7 @@ struct FillStageOptions {
   // tracking never waits. Recorded input (false): Offer() waits for room instead, so that every
   // keyframe is filled; nothing is lost by waiting on a file.
   bool drop_when_busy = true;
-  KeyframeFillerOptions Filler() const { return {pairs, stereo, carry}; }
+  KeyframeFillerOptions Filler() const;
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -23,11 +23,13 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(TrackerOptions, pyramid_levels, icp, use_feat
                                    max_jump_m, max_jump_deg)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PoseRefinementOptions, reprojection_px, min_inliers,
                                    max_change_m, max_change_deg, photometric)
+// The pair geometry appears once, at fill.geometry (FillStageOptions::Filler copies it).
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PairGeometryOptions, min_baseline_m, epipole_margin_px)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PairSelectionOptions, min_matches, max_evaluations,
-                                   min_baseline_m, max_baseline_m, min_median_disparity_px,
-                                   max_near_disparity_px, max_near_disparity_sweep_px,
-                                   epipole_margin_px, allow_forward, max_rotation_deg, window,
-                                   lookahead, spread_third_view_forward, surf, match, refine)
+                                   max_baseline_m, min_median_disparity_px, max_near_disparity_px,
+                                   max_near_disparity_sweep_px, allow_forward, max_rotation_deg,
+                                   window, lookahead, spread_third_view_forward, surf, match,
+                                   refine)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PlaneSweepOptions, window_px, max_planes, max_step_px, min_ncc,
                                    min_uniqueness, min_parallax_px, min_texture, min_window_inside,
                                    smooth_small, smooth_large, downscale, textureless_cost,
@@ -35,14 +37,16 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PlaneSweepOptions, window_px, max_planes, max
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SgbmOptions, num_disparities, rectify_alpha, min_valid_fraction,
                                    block_size, uniqueness_ratio, speckle_window, speckle_range,
                                    max_lr_difference_px)
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(
-    StereoFillOptions, min_baseline_m, epipole_margin_px, plane_sweep_forward, plane_sweep_always,
-    plane_sweep_after_sgbm, sweep_sgbm_rejects, sweep_shadows, plane_sweep, sgbm, min_depth_m,
-    max_depth_m, ring_px, min_ring_samples, ring_cell_px, max_ring_error, ring_scale_correction,
-    max_ring_scale, max_pair_error, edge_margin_px, edge_margin_near_px, edge_jump,
-    hole_edge_margin_near_px, see_through_ratio, see_through_rim_px, see_through_margin_px,
-    see_through_sensor_px, see_through_sensor_step, photometric_patch_px, photometric_hole_patches,
-    min_ncc, min_patch_std, max_mean_difference, occlusion_margin)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(DepthStepOptions, jump, far_side_px, near_side_px)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SeeThroughOptions, ratio, rim_px, near_side_px)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ValidationOptions, min_depth_m, max_depth_m, ring_px,
+                                   min_ring_samples, ring_cell_px, max_ring_error,
+                                   ring_scale_correction, max_ring_scale, max_pair_error)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PhotometricOptions, patch_px, hole_patches, min_ncc,
+                                   min_patch_std, max_mean_difference, occlusion_margin)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(StereoFillOptions, plane_sweep_forward, plane_sweep_always,
+                                   plane_sweep_after_sgbm, sweep_sgbm_rejects, sweep_shadows, sgbm,
+                                   plane_sweep, depth_steps, see_through, validation, photometric)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing, agreement,
                                    correct_own_fills)
 
@@ -53,6 +57,7 @@ nlohmann::json SettingsTree(const TrackerOptions& tracker, const FillStageOption
   return {{"tracker", tracker},
           {"fill",
            {{"queue_capacity", fill.queue_capacity},
+            {"geometry", fill.geometry},
             {"pairs", fill.pairs},
             {"stereo", fill.stereo},
             {"carry", fill.carry}}}};
@@ -109,6 +114,7 @@ void ApplyConfig(const std::string& text, const std::string& path, TrackerOption
     merged.at("tracker").get_to(t);
     const nlohmann::json& fill = merged.at("fill");
     fill.at("queue_capacity").get_to(f.queue_capacity);
+    fill.at("geometry").get_to(f.geometry);
     fill.at("pairs").get_to(f.pairs);
     fill.at("stereo").get_to(f.stereo);
     fill.at("carry").get_to(f.carry);
@@ -121,6 +127,7 @@ void ApplyConfig(const std::string& text, const std::string& path, TrackerOption
     throw InputError(path, std::string("settings refused (") + name + "): " + problem);
   };
   if (!t.Check(&problem)) refuse("tracker");
+  if (!f.geometry.Check(&problem)) refuse("fill.geometry");
   if (!f.pairs.Check(&problem)) refuse("fill.pairs");
   if (!f.stereo.Check(&problem)) refuse("fill.stereo");
   if (!f.carry.Check(&problem)) refuse("fill.carry");

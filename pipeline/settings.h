@@ -5,7 +5,9 @@
 // holds the whole tree of a run, so a run's settings can be fed back):
 //   {"tracker": {"pyramid_levels": 3, "icp": {...}, "surf": {...}, "match": {...},
 //                "ransac": {...}, "keyframes": {...}, ...},
-//    "fill": {"queue_capacity": 16, "pairs": {...}, "stereo": {..., "plane_sweep": {...}},
+//    "fill": {"queue_capacity": 16, "geometry": {...}, "pairs": {...},
+//             "stereo": {"sgbm": {...}, "plane_sweep": {...}, "depth_steps": {...},
+//                        "see_through": {...}, "validation": {...}, "photometric": {...}, ...},
 //             "carry": {...}}}
 // Keys are the Options structs' field names. Settings the file leaves out keep their values.
 //

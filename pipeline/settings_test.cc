@@ -39,7 +39,7 @@ TEST(Config, OverridesWhatTheFileSetsAndKeepsTheRest) {
   ReconstructionOptions options;
   options.fill_options.stereo.plane_sweep_always = true;  // e.g. --sweep-all, not in the file
   EXPECT_EQ(Problem(R"({"tracker": {"icp": {"iterations": [8, 4]}, "pyramid_levels": 2},
-                        "fill": {"stereo": {"sgbm": {"block_size": 7}, "min_ncc": 1,
+                        "fill": {"stereo": {"sgbm": {"block_size": 7}, "photometric": {"min_ncc": 1},
                                             "plane_sweep": {"hole_windows": false}},
                                  "carry": {"agreement": 0.01}}})",
                     &options),
@@ -47,7 +47,7 @@ TEST(Config, OverridesWhatTheFileSetsAndKeepsTheRest) {
   EXPECT_EQ(options.tracker.icp.iterations, (std::vector<int>{8, 4}));
   EXPECT_EQ(options.tracker.pyramid_levels, 2);
   EXPECT_EQ(options.fill_options.stereo.sgbm.block_size, 7);
-  EXPECT_EQ(options.fill_options.stereo.min_ncc, 1.0);  // an integer is a fine number
+  EXPECT_EQ(options.fill_options.stereo.photometric.min_ncc, 1.0);  // an integer is a fine number
   EXPECT_FALSE(options.fill_options.stereo.plane_sweep.hole_windows);
   EXPECT_EQ(options.fill_options.carry.agreement, 0.01);
   EXPECT_TRUE(options.fill_options.stereo.plane_sweep_always);
@@ -59,7 +59,7 @@ TEST(Config, ARunsSettingsReadBackGiveTheSameSettings) {
   ReconstructionOptions changed;
   changed.tracker.use_features = false;
   changed.fill_options.pairs.lookahead = 4;
-  changed.fill_options.stereo.max_ring_error = 0.025;
+  changed.fill_options.stereo.validation.max_ring_error = 0.025;
   ReconstructionOptions read;
   EXPECT_EQ(Problem(SettingsToJson(changed.tracker, changed.fill_options).dump(), &read), "");
   EXPECT_EQ(SettingsToJson(read.tracker, read.fill_options),
@@ -93,16 +93,17 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
   EXPECT_EQ(Problem(R"({"fill": {"stereo": {"sgbm": {"block_size": 4, "num_disparities": 16}}}})",
                     &options),
             "settings refused (fill.stereo): block_size must be odd");
+  // The fill stage's own check: pair selection's near disparity beyond SGBM's search.
+  EXPECT_EQ(Problem(R"({"fill": {"pairs": {"max_near_disparity_px": 200}}})", &options),
+            "settings refused (fill): pairs.max_near_disparity_px exceeds "
+            "stereo.sgbm.num_disparities");
+  // The old place of a setting is refused: the pair geometry is one setting, fill.geometry.
   EXPECT_EQ(Problem(R"({"fill": {"pairs": {"epipole_margin_px": 60}}})", &options),
-            "settings refused (fill): pairs.epipole_margin_px and stereo.epipole_margin_px must "
-            "be equal");
+            "unknown setting 'fill.pairs.epipole_margin_px'");
   EXPECT_EQ(SettingsToJson(options.tracker, options.fill_options), before);
-  // Both together are fine.
-  EXPECT_EQ(Problem(R"({"fill": {"pairs": {"epipole_margin_px": 60},
-                                 "stereo": {"epipole_margin_px": 60}}})",
-                    &options),
-            "");
-  EXPECT_EQ(options.fill_options.stereo.epipole_margin_px, 60);
+  EXPECT_EQ(Problem(R"({"fill": {"geometry": {"epipole_margin_px": 60}}})", &options), "");
+  EXPECT_EQ(options.fill_options.Filler().pairs.geometry.epipole_margin_px, 60);
+  EXPECT_EQ(options.fill_options.Filler().stereo.geometry.epipole_margin_px, 60);
 }
 
 TEST(Config, MissingFileIsAnInputError) {

@@ -11,12 +11,8 @@
 // changed, and only each keyframe's own stereo fills are carried on, never carried ones, so an
 // error cannot feed on itself.
 //
-// On punched TUM fr1/xyz 0:150 (`reconstruct`, tracked poses, `fill-eval.py`): good fills (within
-// 3%) 59.8% -> 77.3%, filled 72.1% -> 90.7%, 90th-percentile error 4.6% -> 4.05% (80 sweep
-// planes; with 96: 78.0% good, 91.4% filled). Without correcting own fills (96 planes): 74.6% good
-// against 78.0%, 90th percentile 5.0%. About 5 ms per keyframe on one core. It also spreads an
-// error that several keyframes share: clear glass filled at the glass's own depth on the demo scene
-// went from 138 to 198 pixels (of about 15000).
+// It also spreads an error that several keyframes share. Its measured effect (tuning and check
+// sets) is in docs/experiments/.
 //
 // No threads, no I/O. The free functions keep no state; a FillCarrier keeps the last keyframes'
 // fill points and is used from one thread. Usage:

@@ -25,8 +25,8 @@ bool KeyframeFillerOptions::Check(std::string* message) const {
     return fail("pairs.max_near_disparity_px exceeds stereo.sgbm.num_disparities");
   // Pair selection picks a partner by the method that will fill it (its disparity limits differ
   // for forward pairs); the stereo must classify the pair the same way.
-  if (pairs.epipole_margin_px != stereo.epipole_margin_px)
-    return fail("pairs.epipole_margin_px and stereo.epipole_margin_px must be equal");
+  if (!(pairs.geometry == stereo.geometry))
+    return fail("pair selection and stereo must share one geometry (the fill's `geometry`)");
   return pairs.Check(message) && stereo.Check(message) && carry.Check(message);
 }
 

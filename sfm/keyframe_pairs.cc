@@ -27,12 +27,13 @@ bool PairSelectionOptions::Check(std::string* message) const {
   };
   if (min_matches < 1) return fail("min_matches must be positive");
   if (max_evaluations < 1) return fail("max_evaluations must be positive");
-  if (!(min_baseline_m > 0) || !(max_baseline_m > min_baseline_m))
-    return fail("need 0 < min_baseline_m < max_baseline_m");
+  if (!geometry.Check(message)) return false;
+  if (!(max_baseline_m > geometry.min_baseline_m))
+    return fail("need geometry.min_baseline_m < max_baseline_m");
   if (!(max_rotation_deg > 0)) return fail("max_rotation_deg must be positive");
   if (!(min_median_disparity_px >= 0) || !(max_near_disparity_px > min_median_disparity_px) ||
-      !(max_near_disparity_sweep_px > min_median_disparity_px) || !(epipole_margin_px >= 0))
-    return fail("need 0 <= min_median_disparity_px < max_near_disparity_px, margin >= 0");
+      !(max_near_disparity_sweep_px > min_median_disparity_px))
+    return fail("need 0 <= min_median_disparity_px < max_near_disparity_px");
   if (window < 1 || lookahead < 0) return fail("need window >= 1 and lookahead >= 0");
   return surf.Check(message) && match.Check(message) && refine.Check(message);
 }
@@ -71,7 +72,7 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
   int too_short = 0, too_long = 0, too_rotated = 0, forward = 0;
   for (size_t i = 0; i < candidates.size(); ++i) {
     const SE3 rel = key1.world_from_camera.Inverse() * candidates[i]->world_from_camera;
-    const bool is_forward = IsForwardPair(camera, rel, options.epipole_margin_px);
+    const bool is_forward = IsForwardPair(camera, rel, options.geometry.epipole_margin_px);
     const Geometry g{static_cast<int>(i), rel.TranslationNorm(), rel.RotationAngle() * kDegPerRad,
                      is_forward};
     // Parallax comes from the motion across key1's optical axis, or from all of it when forward
@@ -80,7 +81,7 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
     // Rectified stereo searches a fixed disparity range; the plane sweep (forward pairs) does not.
     const double max_near_disparity =
         is_forward ? options.max_near_disparity_sweep_px : options.max_near_disparity_px;
-    if (g.baseline < options.min_baseline_m ||
+    if (g.baseline < options.geometry.min_baseline_m ||
         f * lateral / median_depth < options.min_median_disparity_px) {
       ++too_short;
     } else if (g.baseline > options.max_baseline_m ||

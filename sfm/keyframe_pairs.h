@@ -5,7 +5,7 @@
 // pair's relative pose refined from those matches (RefinePairPose), and only when the parallax
 // suits I1's depth range: the disparity of I1's median depth at least min_median_disparity_px, that
 // of its near depth (5th percentile) at most max_near_disparity_px (the stereo search range), the
-// baseline at least min_baseline_m, the viewing directions at most max_rotation_deg apart, and
+// baseline at least geometry.min_baseline_m, the viewing directions at most max_rotation_deg apart, and
 // (unless allow_forward, since the stereo fill plane-sweeps forward pairs) the epipole outside both
 // images. The geometry is screened with the tracked poses and the chosen pair's refined pose
 // reported. The next acceptable keyframe after I2 is kept as the third view (photometric check,
@@ -36,30 +36,28 @@
 #include "registration/pair_pose.h"
 #include "registration/ransac.h"
 #include "registration/surf.h"
+#include "sfm/stereo_fill.h"
 
 namespace gf {
 
 struct PairSelectionOptions {
   int min_matches = 40;                // M: SURF matches the pair must share (PnP RANSAC inliers)
   int max_evaluations = 10;            // candidates matched at most per keyframe (farthest first)
-  double min_baseline_m = 0.04;        // shorter baselines give too little parallax, metres
+  PairGeometryOptions geometry;        // least baseline; forward-pair margin (shared with the fill)
   double max_baseline_m = 0.50;        // longer ones change the view too much for block matching
   double min_median_disparity_px = 8;  // parallax at I1's median depth, pixels
   double max_near_disparity_px = 80;   // parallax at I1's near depth; keep <= the stereo search
-  double max_near_disparity_sweep_px = 176;  // the same for forward pairs (plane sweep: no range;
-                                             // longer baselines gave more parallax on TUM)
-  double epipole_margin_px = 40;   // epipole inside an image or this close: forward motion
+  double max_near_disparity_sweep_px = 176;  // the same for forward pairs (the plane sweep has no
+                                             // search range; this bounds how far views differ)
   bool allow_forward = true;       // forward pairs too (the stereo fill plane-sweeps them)
   double max_rotation_deg = 20.0;  // largest angle between the two viewing directions, degrees
   int window = 30;                 // earlier keyframes considered as partners
-  int lookahead = 10;  // later keyframes waited for before a keyframe is paired (3 -> 10 raised
-                       // good fills on punched TUM frames 0-40 from 0.32 to about 0.44)
+  int lookahead = 10;  // later keyframes waited for before a keyframe is paired (partners may
+                       // come after it)
   // The third view of a forward pair (the plane sweep's second view): the acceptable candidate
   // farthest from the partner (true), not the next one after it in order of baseline (usually the
-  // partner's neighbour, nearly the same view). Punched TUM 0:150, where every pair is forward:
-  // good fills 0.546 -> 0.598. Sideways pairs keep the next candidate: a far third view there
-  // raised synthetic good fills 71.9 -> 74.0% but also clear glass filled at the glass's depth
-  // (synthetic 29 -> 54 pixels, demo 138 -> 182), from the sweep after SGBM.
+  // partner's neighbour, nearly the same view). Sideways pairs keep the next candidate (a far one
+  // there lets the sweep after SGBM match clear glass at its own depth).
   bool spread_third_view_forward = true;
   SurfOptions surf = [] {
     SurfOptions s;

@@ -67,7 +67,7 @@ TEST_F(KeyframePairs, SchedulerPairsEveryKeyframeWithinTheLimits) {
     ++paired;
     const PairChoice& c = jobs[j].choice;
     EXPECT_GE(c.matches, options.min_matches);
-    EXPECT_GE(c.baseline_m, options.min_baseline_m * 0.9);
+    EXPECT_GE(c.baseline_m, options.geometry.min_baseline_m * 0.9);
     EXPECT_LE(c.baseline_m, options.max_baseline_m);
     EXPECT_LE(c.rotation_deg, options.max_rotation_deg + 1);
     EXPECT_NE(jobs[j].key2->id, jobs[j].key1->id);
@@ -101,7 +101,7 @@ TEST_F(KeyframePairs, ForwardPairGetsAThirdViewFarFromThePartner) {
     candidates.push_back(MakeStereoKeyframe(1 + i, frame, pose, camera, options.surf));
   }
   ASSERT_TRUE(
-      IsForwardPair(camera, poses_[10].Inverse() * along_axis(-0.16), options.epipole_margin_px));
+      IsForwardPair(camera, poses_[10].Inverse() * along_axis(-0.16), options.geometry.epipole_margin_px));
   const PairChoice spread = SelectPartner(*key1, candidates, camera, options);
   ASSERT_TRUE(spread.found) << spread.reason;
   EXPECT_EQ(spread.partner, 0) << spread.BriefReport();
@@ -118,7 +118,7 @@ TEST_F(KeyframePairs, ForwardPairGetsAThirdViewFarFromThePartner) {
 TEST(PairSelectionOptions, RejectsBadSettings) {
   PairSelectionOptions o;
   EXPECT_TRUE(o.Check());
-  o.max_baseline_m = o.min_baseline_m / 2;
+  o.max_baseline_m = o.geometry.min_baseline_m / 2;
   std::string message;
   EXPECT_FALSE(o.Check(&message));
   EXPECT_FALSE(message.empty());

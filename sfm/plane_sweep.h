@@ -34,15 +34,12 @@ namespace gf {
 
 struct PlaneSweepOptions {
   int window_px = 7;  // correlation window side, pixels (odd)
-  // Most planes swept. 96 -> 80 took forward TUM pairs from 147 to 128 ms on one core; punched
-  // TUM good fills 78.0 -> 77.3% (0:150), 85.3 -> 84.3% (0:40); ICL and synthetic unchanged.
-  int max_planes = 80;
+  int max_planes = 80;  // most planes swept (time per pair grows with them)
   double max_step_px = 1.0;        // the plane spacing moves no pixel by more than this, pixels
   double min_ncc = 0.5;            // textured pixels: mean correlation needed at the chosen plane
   double min_uniqueness = 0.05;    // chosen plane's (aggregated) cost must be this much (relative)
                                    // below every plane more than one step away
   double min_parallax_px = 0.15;   // a 3% depth change must move the pixel this much in a view, px
-                                   // (0.6 -> 0.15 raised good fills on punched TUM 0.21 -> 0.27)
   double min_texture = 0.5;        // grey-level standard deviation of keyframe 1's window
   double min_window_inside = 0.3;  // fraction of the window inside keyframe 1's image (borders)
   // Semi-global aggregation of the matching cost (cost 1 - NCC, in hundredths) along 8 image
@@ -56,9 +53,7 @@ struct PlaneSweepOptions {
   // Windows of hole pixels use hole pixels only (where they fill min_window_inside of the
   // window): a measured surface's texture then cannot carry its depth into the hole next to it
   // (foreground fattening, e.g. a label's depth onto the clear glass below it). Projector-shadow
-  // pixels do not count as hole pixels here (they show the background beside an edge). Leaving
-  // them out took the demo scene's clear-glass fills at the glass's depth from 182 to 133, with
-  // no loss of fill on ICL, TUM or the synthetic scenes.
+  // pixels do not count as hole pixels here (they show the background beside an edge).
   bool hole_windows = true;
   bool Check(std::string* message = nullptr) const;
 };

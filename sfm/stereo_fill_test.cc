@@ -95,78 +95,55 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   const Rendered &a = t.a, &b = t.b;
   const SE3& key1_from_key2 = t.key1_from_key2;
   const Camera camera = synth::SynthCamera();
+  const cv::Mat measured = a.frame.hole_mask == 0;
 
-  // Rectified SGBM alone.
+  // Rectified SGBM alone: most of the glossy, dark and textured-glass holes, with small errors.
   StereoFillOptions sgbm_only;
   sgbm_only.plane_sweep_after_sgbm = false;
   const StereoFillResult r = FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, sgbm_only);
   ASSERT_TRUE(r.success) << r.BriefReport();
   EXPECT_EQ(r.method, "rectified SGBM");
+  EXPECT_EQ(r.path, "rectified_sgbm");
   // Measured pixels are never changed.
-  cv::Mat measured = a.frame.hole_mask == 0;
   EXPECT_EQ(cv::norm(r.filled_depth, a.frame.depth, cv::NORM_INF, measured), 0.0);
   EXPECT_EQ(cv::countNonZero(r.fill_mask & measured), 0);
   const FillScore s = Score(a, r);
-  // Measured on this pair: 87% filled, median error 0.42%, 90th percentile 1.5%.
-  EXPECT_GT(s.fill_rate, 0.85);
+  EXPECT_GT(s.fill_rate, 0.8);
   EXPECT_LT(Percentile(s.errors, 0.5), 0.01);
   EXPECT_LT(Percentile(s.errors, 0.9), 0.03);
-  // The goal is that no filled clear-glass pixel takes the depth of the glass instead of the
-  // background behind it: measured none of 946 (952 before the sensor test on the rims, 1068
-  // before the rim rule of the holes SGBM sees into, see_through_rim_px, which the test on the
-  // shelf below covers). Without the near-side
-  // margin within holes (hole_edge_margin_near_px) 1 of 1048, on the bottle's edge (the glass's rim
-  // is matched), at 89% filled; before the near-side edge margin (edge_margin_near_px) 13 of 1063,
-  // next to the bottle's printed label (block matching spreads the label's depth).
+  // Clear glass is filled with the background seen through it, not the glass's own depth.
+  EXPECT_GT(s.clear_glass_filled, 0);
   EXPECT_LE(s.clear_glass_as_glass, s.clear_glass_filled / 500);
-  StereoFillOptions sgbm_no_hole_margin = sgbm_only;
-  sgbm_no_hole_margin.hole_edge_margin_near_px = 0;
-  const FillScore sn =
-      Score(a, FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, sgbm_no_hole_margin));
-  EXPECT_GE(sn.clear_glass_as_glass, s.clear_glass_as_glass);
-  EXPECT_GT(sn.filled, s.filled);  // what the margin costs: 1.6 points of these holes
 
   // The default: SGBM, then the plane sweep (with a third keyframe, as in the pipeline) over the
-  // holes SGBM left empty, projector shadows apart. On this pair those are nearly all shadows (63
-  // pixels are not, since shadows are continued down the bottle's glass), so it fills as much as
-  // SGBM alone with the same third view; told to sweep the shadows as well, it fills more.
+  // holes SGBM left empty, projector shadows apart: at least as much as SGBM with the same third
+  // view, as accurate; told to sweep the shadows as well, it fills more.
   const ThirdView third = t.Third();
   const StereoFillResult r3 =
       FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, sgbm_only, third);
-  const auto start = std::chrono::steady_clock::now();
   const StereoFillResult d =
       FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, StereoFillOptions{}, third);
-  std::printf(
-      "fill took %.0f ms\n",
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   ASSERT_TRUE(d.success) << d.BriefReport();
   EXPECT_EQ(d.method, "rectified SGBM + plane sweep");
   EXPECT_EQ(cv::norm(d.filled_depth, a.frame.depth, cv::NORM_INF, measured), 0.0);
-  const FillScore sd = Score(a, d);
   EXPECT_GE(d.filled_pixels, r3.filled_pixels) << r3.BriefReport();
+  const FillScore sd = Score(a, d);
+  EXPECT_GT(sd.fill_rate, 0.8);
+  EXPECT_LT(Percentile(sd.errors, 0.5), 0.01);
+  EXPECT_LT(Percentile(sd.errors, 0.9), 0.03);
+  EXPECT_LE(sd.clear_glass_as_glass, sd.clear_glass_filled / 500);
   StereoFillOptions with_shadows;
   with_shadows.sweep_shadows = true;
   const StereoFillResult ds =
       FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, with_shadows, third);
   EXPECT_GT(ds.filled_pixels, r3.filled_pixels + 100) << ds.BriefReport();
-  // Measured: 83.3% of the glossy, dark and textured-glass holes filled, median error 0.41%, 90th
-  // percentile 1.4%; none of 843 filled clear-glass pixels nearer the glass than the background
-  // (84.3% and 1 of 1099 when the sweep also retries the pixels whose SGBM depth was dropped and
-  // the rim rule is off; before the rim rule, 85.4% and 1 of 970 without the near-side margin
-  // within holes).
-  EXPECT_GT(sd.fill_rate, 0.82);
-  EXPECT_LT(Percentile(sd.errors, 0.5), 0.01);
-  EXPECT_LT(Percentile(sd.errors, 0.9), 0.03);
-  EXPECT_LE(sd.clear_glass_as_glass, sd.clear_glass_filled / 500);
 
   // The sweep's hole windows (hole pixels correlate over hole pixels only) keep the printed
-  // label's depth off the clear glass below it. Measured with the sweep also retrying the pixels
-  // whose SGBM depth was dropped (sweep_sgbm_rejects, where the sweep meets that glass most):
-  // 1 of 1099 with hole windows, 15 of 1077 without (3 of 1110 and 28 of 1099 before shadows
-  // were continued down the glass and left out of the hole windows).
+  // label's depth off the clear glass below it, where the sweep meets that glass most: retrying
+  // the pixels whose SGBM depth was dropped, rims off.
   StereoFillOptions retry;
   retry.sweep_sgbm_rejects = true;
-  retry.see_through_rim_px = 0;  // the rim rule (below) keeps the sweep off the glass's rim anyway
+  retry.see_through.rim_px = 0;
   StereoFillOptions retry_full_windows = retry;
   retry_full_windows.plane_sweep.hole_windows = false;
   const FillScore sr =
@@ -180,22 +157,16 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
 // The shelf's clear vases stand a few centimetres before the shelf's back, so the glass's own
 // depth and the background's seen through it differ by about 5%: the window matchers carry the
 // depth of the vase's edge a few pixels into the glass. The vase's hole is one SGBM sees into (its
-// depth is not nearer than its ring's), and on its rim only SGBM's depth fills that has neither a
-// farther SGBM depth in the hole within 8 px nor a sensor depth more than 3% farther within 3 px.
+// depth is not nearer than its ring's); on its rim only SGBM's depth fills, held to the wider
+// near-side rule, and the sweep stays out. Without the rims, the glass's depth fills there.
 TEST(FillHolesByStereo, KeepsTheGlassEdgesDepthOffClearGlassOnTheShelf) {
   const Camera camera = synth::SynthCamera();
-  StereoFillOptions no_rim, no_sensor_test;
-  no_rim.see_through_rim_px = 0;
-  no_sensor_test.see_through_sensor_px = 0;
-  // Keyframes 1 and 2 and the third view; how many filled clear-glass pixels at the glass's depth
-  // there are at least without the rims, and without the sensor test on them.
+  StereoFillOptions no_rim;
+  no_rim.see_through.rim_px = 0;
   struct Case {
-    int i1, i2, i3, off, no_sensor;
+    int i1, i2, i3;  // keyframes 1 and 2, and the third view
   };
-  // Measured without the rims: 10 of 4341 and 16 of 4288; without the sensor test on them 0 of
-  // 4041 and 2 of 3535; with both 0 of 3714 and 0 of 3371, the glossy, dark and textured-glass
-  // pixels filled as many.
-  for (const Case& c : {Case{10, 16, 6, 5, 0}, Case{20, 10, 16, 5, 1}}) {
+  for (const Case& c : {Case{10, 16, 6}, Case{20, 10, 16}}) {
     SCOPED_TRACE(std::to_string(c.i1) + "/" + std::to_string(c.i2));
     const RenderedTriple t = RenderTriple("shelf", 1, c.i1, c.i2, c.i3);
     const ThirdView third = t.Third();
@@ -203,12 +174,12 @@ TEST(FillHolesByStereo, KeepsTheGlassEdgesDepthOffClearGlassOnTheShelf) {
       return Score(t.a,
                    FillHolesByStereo(t.a.frame, t.b.frame, camera, t.key1_from_key2, o, third));
     };
-    const FillScore on = score({}), off = score(no_rim), no_sensor = score(no_sensor_test);
-    EXPECT_GE(off.clear_glass_as_glass, c.off);
-    EXPECT_GE(no_sensor.clear_glass_as_glass, c.no_sensor);
-    EXPECT_EQ(on.clear_glass_as_glass, 0);
+    const FillScore on = score({}), off = score(no_rim);
+    EXPECT_GE(off.clear_glass_as_glass, 5);
+    EXPECT_LE(on.clear_glass_as_glass, on.clear_glass_filled / 1000);
+    EXPECT_LT(on.clear_glass_as_glass, off.clear_glass_as_glass);
     EXPECT_GT(on.clear_glass_filled, 0.75 * off.clear_glass_filled);
-    EXPECT_EQ(on.filled, off.filled);
+    EXPECT_EQ(on.filled, off.filled);  // glossy, dark and textured glass are not touched
   }
 }
 
@@ -231,8 +202,12 @@ TEST(SeeThroughRim, FindsTheRimsOfTheHolesStereoSeesInto) {
   // judged as one, the dark object's 4500 pixels would outvote the glass's 2400.
   hole(cv::Rect(80, 100, 60, 2), 0.f);
   f.depth.setTo(0.f, f.hole_mask != 0);
-  const StereoFillOptions options;
-  const cv::Mat rim = SeeThroughRim(f, stereo, options);
+  const StereoFillOptions o;
+  auto rim_of = [&](const SeeThroughOptions& see_through) {
+    return SeeThroughRim(f, stereo, see_through, o.validation.ring_px,
+                         o.validation.min_ring_samples);
+  };
+  const cv::Mat rim = rim_of(o.see_through);
   ASSERT_FALSE(rim.empty());
   EXPECT_EQ(cv::countNonZero(rim(dark)), 0);
   EXPECT_EQ(cv::countNonZero(rim(at_edge)), 0);
@@ -247,11 +222,11 @@ TEST(SeeThroughRim, FindsTheRimsOfTheHolesStereoSeesInto) {
   EXPECT_LT(rim_pixels, 2 * (40 + 60) * 6);
   // Glass seen in front of what surrounds it is no see-through hole: nothing qualifies.
   stereo(glass).setTo(1.8f);
-  EXPECT_TRUE(SeeThroughRim(f, stereo, options).empty());
-  StereoFillOptions off;
-  off.see_through_rim_px = 0;
+  EXPECT_TRUE(rim_of(o.see_through).empty());
+  SeeThroughOptions off;
+  off.rim_px = 0;
   stereo(glass).setTo(2.2f);
-  EXPECT_TRUE(SeeThroughRim(f, stereo, off).empty());
+  EXPECT_TRUE(rim_of(off).empty());
 }
 
 TEST(FillHolesByStereo, RejectsShortBaselinesAndForwardMotion) {

@@ -1,0 +1,320 @@
+// The inner loops of the plane sweep (sfm/plane_sweep.h): warping a view through a plane's
+// homography fused with window sums, the correlation and cost of a row, and semi-global
+// aggregation along one path. Internal to plane_sweep.cc (which alone includes it): written as
+// branch-free loops over rows so that they vectorise, and compiled for AVX2 and baseline x86-64.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+namespace gf::sweep_detail {
+
+// The inner loops are compiled twice, for AVX2 (twice the vector width) and for the baseline
+// x86-64 (SSE2); the loader picks what the CPU has.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define GF_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define GF_VECTOR_CLONES
+#endif
+
+inline cv::Mat GrayFloat(const cv::Mat& bgr) {
+  cv::Mat gray, f;
+  cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
+  gray.convertTo(f, CV_32F);
+  return f;
+}
+
+// Grey level of view pixels outside the image: a bilinear sample with any share of one is below
+// -0.5 (shares are at least ~1e-9 in float), so it is known as uncovered.
+constexpr float kUncovered = -1e9f;
+
+struct ViewData {
+  cv::Mat gray;  // CV_32F: undistorted grey level at working size, kUncovered outside the image
+  Eigen::Matrix3d rotation;  // view_from_key1
+  Eigen::Vector3d translation;
+};
+
+// out[x] = in[x] + in[x + step] + ... + in[x + (count - 1) step] for x < n; one pass, so the sums
+// vectorise over x. The common window sizes get a fixed count.
+template <int kCount>
+inline void SumFixed(const float* __restrict in, size_t step, int n, float* __restrict out) {
+  for (int x = 0; x < n; ++x) {
+    float a = in[x];
+    for (int k = 1; k < kCount; ++k) a += in[x + k * step];
+    out[x] = a;
+  }
+}
+GF_VECTOR_CLONES inline void SumWindows(const float* in, size_t step, int count, int n, float* out) {
+  switch (count) {
+    case 3:
+      return SumFixed<3>(in, step, n, out);
+    case 5:
+      return SumFixed<5>(in, step, n, out);
+    case 7:
+      return SumFixed<7>(in, step, n, out);
+    case 9:
+      return SumFixed<9>(in, step, n, out);
+    default:
+      std::copy(in, in + n, out);
+      for (int k = 1; k < count; ++k)
+        for (int x = 0; x < n; ++x) out[x] += in[x + k * step];
+  }
+}
+
+// One row of one view's correlation with keyframe 1, from the window sums m (4 channels of n
+// values, as WindowSums gives them): where the view covers every pixel of the window that keyframe
+// 1 covers, seen counts up; where both windows also have texture, sum gains the NCC and count one.
+// Branch-free, so that it vectorises. window_inside: keyframe 1's coverage mean per window;
+// mean_i, var_i: its grey level's.
+GF_VECTOR_CLONES inline void AccumulateCorrelation(const float* m, int n, float inv_area, float min_inside,
+                                            float min_var, const float* window_inside,
+                                            const float* mean_i, const float* var_i,
+                                            float* __restrict sum, float* __restrict count,
+                                            float* __restrict seen) {
+  const float *m_jc = m, *m_jj = m + n, *m_ji = m + 2 * n, *m_c = m + 3 * n;
+  for (int x = 0; x < n; ++x) {
+    const float inside_x = window_inside[x];
+    const int inside = (inside_x >= min_inside) & (m_c[x] * inv_area >= inside_x - 1e-3f);
+    const float inv_n = inv_area / inside_x;
+    const float mj = m_jc[x] * inv_n;
+    const float vj = m_jj[x] * inv_n - mj * mj;
+    const int textured = inside & (vj > min_var) & (var_i[x] > min_var);
+    const float ncc =
+        (m_ji[x] * inv_n - mean_i[x] * mj) / std::sqrt(std::max(var_i[x] * vj, 1e-12f));
+    seen[x] += static_cast<float>(inside);
+    sum[x] += ncc * static_cast<float>(textured);
+    count[x] += static_cast<float>(textured);
+  }
+}
+
+// One row of the cost volume from the correlation sums of all views (sum, count, seen as
+// AccumulateCorrelation leaves them; var_i: keyframe 1's window variance): textureless_cost where
+// no view sees the window or keyframe 1's window is flat; 100 where it is textured and flat in
+// every view (no match); else 100 (1 - mean NCC), plus 0.5 (so that truncation rounds). Branch-free
+// (a clamp here would not vectorise: the caller clamps).
+GF_VECTOR_CLONES inline void CostRow(const float* __restrict sum, const float* __restrict count,
+                              const float* __restrict var_i, const float* __restrict seen, int n,
+                              float min_var, float textureless_cost, float* __restrict out) {
+  for (int x = 0; x < n; ++x) {
+    // No textured view (count 0, so sum 0): 100. (A ternary: std::max would not vectorise.)
+    const float views = count[x] < 1.f ? 1.f : count[x];
+    const float matched = 100.f * (1.f - sum[x] / views);
+    // A blend, not a select of `matched`: the compiler would move the division under the
+    // condition, and a conditional division does not vectorise.
+    const float seen_here = seen[x] > 0.f ? 1.f : 0.f;
+    const float textured = var_i[x] > min_var ? seen_here : 0.f;
+    const float value = textureless_cost + textured * (matched - textureless_cost);
+    out[x] = value + 0.5f;  // truncated (and clamped) by the caller: rounded
+  }
+}
+
+// Where the pixels (x, y), x < n, of a row map through the homography h (row-major): the
+// homography is affine along a row up to the division. Behind the camera, or with a homography that
+// is not finite: -1, outside every image.
+GF_VECTOR_CLONES inline void SamplePositions(const float* h, bool finite, int y, int n,
+                                      float* __restrict u, float* __restrict v) {
+  const float bx = h[1] * y + h[2], by = h[4] * y + h[5], bz = h[7] * y + h[8];
+  for (int x = 0; x < n; ++x) {
+    const float qz = bz + h[6] * x;
+    const bool ahead = qz > 1e-9f && finite;
+    const float inv = ahead ? 1.f / qz : 0.f;
+    u[x] = ahead ? (bx + h[0] * x) * inv : -1.f;
+    v[x] = ahead ? (by + h[3] * x) * inv : -1.f;
+  }
+}
+
+// One row of samples of a view at positions (u, v) (outside the image: none; never NaN, as
+// SamplePositions gives them): J, bilinear where every pixel with a share in it lies in the view's
+// image, else 0 and uncovered; then the products the window sums need, weighted by keyframe 1's
+// coverage c1 (i1: its grey level). Branch-free, so that it vectorises (gathers).
+GF_VECTOR_CLONES inline void SampleRow(const ViewData& view, const float* __restrict u_in,
+                                const float* __restrict v_in, int n, const float* __restrict i1,
+                                const float* __restrict c1, float* __restrict jc,
+                                float* __restrict jj, float* __restrict ji,
+                                float* __restrict covered) {
+  const int width = view.gray.cols;
+  // Largest positions whose 2x2 neighbourhood is inside: just below the last row and column.
+  const float max_u = std::nextafter(static_cast<float>(width - 1), 0.f),
+              max_v = std::nextafter(static_cast<float>(view.gray.rows - 1), 0.f);
+  const float* gray = reinterpret_cast<const float*>(view.gray.data);
+  for (int x = 0; x < n; ++x) {
+    // Clamped into the image; inside when clamping changed nothing (two selects: a combined
+    // condition would not vectorise).
+    const float u = std::min(std::max(u_in[x], 0.f), max_u),
+                v = std::min(std::max(v_in[x], 0.f), max_v);
+    const float inside_u = u == u_in[x] ? 1.f : 0.f;
+    const float inside = v == v_in[x] ? inside_u : 0.f;
+    const int x0 = static_cast<int>(u), y0 = static_cast<int>(v);
+    const int at = y0 * width + x0;
+    const float fu = u - x0, fv = v - y0;
+    const float top = gray[at] + fu * (gray[at + 1] - gray[at]);
+    const float bottom = gray[at + width] + fu * (gray[at + width + 1] - gray[at + width]);
+    const float sample = top + fv * (bottom - top);
+    // Any uncovered pixel with a share in the sample drags it far below zero.
+    const float seen = sample > -0.5f ? inside : 0.f;
+    const float j = sample * seen;
+    const float weighted = j * c1[x];
+    jc[x] = weighted;
+    jj[x] = weighted * j;
+    ji[x] = weighted * i1[x];
+    covered[x] = seen * c1[x];
+  }
+}
+
+// The hole channels of a sampled row: the four channels (each `padded` apart) weighted by the
+// hole share h of keyframe 1's coverage instead of the coverage c, which is 0 or 1: c h = h.
+GF_VECTOR_CLONES inline void WeightByHoles(const float* __restrict h, int n, size_t padded,
+                                    float* __restrict channels) {
+  for (int c = 0; c < 4; ++c) {
+    const float* in = channels + static_cast<size_t>(c) * padded;
+    float* out = channels + static_cast<size_t>(c + 4) * padded;
+    for (int x = 0; x < n; ++x) out[x] = in[x] * h[x];
+  }
+}
+
+// Per pixel, the hole channels (4..7 of m) where use_hole is 1, else the full ones (0..3) (use_hole
+// is 0 or 1): out holds 4 channels of n values. Arithmetic, so that it vectorises.
+GF_VECTOR_CLONES inline void SelectWindows(const float* __restrict m, const float* __restrict use_hole,
+                                    int n, float* __restrict out) {
+  for (int c = 0; c < 4; ++c) {
+    const float* full = m + static_cast<size_t>(c) * n;
+    const float* hole = m + static_cast<size_t>(c + 4) * n;
+    float* o = out + static_cast<size_t>(c) * n;
+    for (int x = 0; x < n; ++x) o[x] = use_hole[x] * hole[x] + (1.f - use_hole[x]) * full[x];
+  }
+}
+
+// sum[i] += sign * row[i] for i < n (vectorises).
+GF_VECTOR_CLONES inline void Accumulate(const float* __restrict row, size_t n, float sign,
+                                 float* __restrict sum) {
+  for (size_t i = 0; i < n; ++i) sum[i] += sign * row[i];
+}
+
+// Window sums of one view's warped grey level J for a plane, one output row at a time: J is
+// sampled bilinearly through the plane's homography (key1 pixel -> view pixel), then summed over
+// window x window pixels (zero outside the ROI, as a constant-border box filter). The four sums:
+// J c, J^2 c, J I c and the view's coverage c (c: keyframe 1's coverage, I: its grey level); with
+// a hole weight h (keyframe 1's hole share of c, c being 0 or 1), four more with h in place of c,
+// for windows that use hole pixels only. Rows are summed directly; columns by running sums that
+// are redone directly every kExactEvery rows, so float rounding cannot drift.
+class WindowSums {
+ public:
+  WindowSums(int rows, int cols, int window, bool holes)
+      : rows_(rows),
+        cols_(cols),
+        window_(window),
+        half_(window / 2),
+        channels_(holes ? 8 : 4),
+        padded_(cols + 2 * (window / 2)),
+        sample_(static_cast<size_t>(channels_) * padded_, 0.f),
+        ring_(static_cast<size_t>(window) * channels_ * cols, 0.f),
+        sums_(static_cast<size_t>(channels_) * cols),
+        u_(cols),
+        v_(cols) {}
+
+  // Runs over the ROI for one view and plane; calls row_done(y, sums) for every output row y,
+  // sums holding the 4 (or 8, with holes) channels of `cols` values each (channel-major).
+  // h_roi: the hole weights, used only when the object was made with holes.
+  template <typename RowDone>
+  void Run(const ViewData& view, const Eigen::Matrix3d& key1_to_view, const cv::Mat& i_roi,
+           const cv::Mat& c_roi, const cv::Mat& h_roi, RowDone row_done) {
+    std::fill(ring_.begin(), ring_.end(), 0.f);
+    float h[9];
+    for (int i = 0; i < 9; ++i) h[i] = static_cast<float>(key1_to_view(i / 3, i % 3));
+    const bool finite = key1_to_view.allFinite();
+    const size_t row_values = static_cast<size_t>(channels_) * cols_;
+    std::fill(sums_.begin(), sums_.end(), 0.f);
+    for (int y = 0; y < rows_ + half_; ++y) {
+      // The slot of the row that leaves the window (zero for the first rows).
+      float* slot = &ring_[static_cast<size_t>(y % window_) * row_values];
+      const int out_row = y - half_;
+      const bool exact = out_row % kExactEvery == 0;  // direct sums this row, else running ones
+      if (!exact) Accumulate(slot, row_values, -1.f, sums_.data());
+      if (y < rows_) {
+        SamplePositions(h, finite, y, cols_, u_.data(), v_.data());
+        float* jc = &sample_[half_];
+        SampleRow(view, u_.data(), v_.data(), cols_, i_roi.ptr<float>(y), c_roi.ptr<float>(y), jc,
+                  jc + padded_, jc + 2 * padded_, jc + 3 * padded_);
+        if (channels_ == 8) WeightByHoles(h_roi.ptr<float>(y), cols_, padded_, jc);
+        for (int c = 0; c < channels_; ++c)
+          SumWindows(&sample_[static_cast<size_t>(c) * padded_], 1, window_, cols_,
+                     slot + static_cast<size_t>(c) * cols_);
+      } else {
+        std::fill(slot, slot + row_values, 0.f);
+      }
+      // The ring holds rows out_row - half .. out_row + half (in rotated order).
+      if (exact)
+        SumWindows(ring_.data(), row_values, window_, static_cast<int>(row_values), sums_.data());
+      else
+        Accumulate(slot, row_values, 1.f, sums_.data());
+      if (out_row < 0) continue;
+      row_done(out_row, sums_.data());
+    }
+  }
+
+ private:
+  // Vertical sums run (add the row that enters, subtract the one that leaves) and are summed
+  // directly every kExactEvery-th row, which bounds float drift to a few roundings.
+  static constexpr int kExactEvery = 8;
+  int rows_, cols_, window_, half_, channels_;
+  size_t padded_;
+  std::vector<float> sample_;  // the channels of one ROI row, padded by half a window each side
+  std::vector<float> ring_;    // the last `window` rows' horizontal sums, all channels
+  std::vector<float> sums_, u_, v_;
+};
+
+// Cost volume entries: 100 * (1 - mean NCC) in [0, 200]; textureless_cost where keyframe 1's
+// window is flat or no view sees it (neutral: aggregation then carries the neighbours' evidence).
+
+// One path of semi-global aggregation (Hirschmueller 2008) over cost[rows][cols][planes], added
+// into sum: L(p, d) = C(p, d) + min(L(q, d), L(q, d +- 1) + p1, min_k L(q, k) + p2) - min_k L(q, k)
+// with q the predecessor of p along (dx, dy). Rows are visited in the path's vertical direction,
+// so a predecessor is either earlier in the same row (dy = 0) or in the previous row.
+GF_VECTOR_CLONES inline void AggregatePath(const std::vector<uint8_t>& cost, int rows, int cols,
+                                    int planes, int dx, int dy, int p1, int p2,
+                                    std::vector<uint16_t>* sum) {
+  // Each pixel's L row is padded with one large entry on either side, so that the d - 1 and
+  // d + 1 neighbours need no bounds checks (and the loop vectorises).
+  const size_t stride = static_cast<size_t>(planes) + 2;
+  constexpr uint16_t kPad = 0x3fff;
+  std::vector<uint16_t> previous(cols * stride, kPad), current(cols * stride, kPad);
+  std::vector<uint16_t> previous_min(cols), current_min(cols);
+  for (int i = 0; i < rows; ++i) {
+    const int y = dy >= 0 ? i : rows - 1 - i;
+    for (int j = 0; j < cols; ++j) {
+      const int x = dx >= 0 ? j : cols - 1 - j;
+      const uint8_t* __restrict c = &cost[(static_cast<size_t>(y) * cols + x) * planes];
+      uint16_t* __restrict l = &current[x * stride + 1];
+      uint16_t* __restrict s = &(*sum)[(static_cast<size_t>(y) * cols + x) * planes];
+      const int px = x - dx, py = y - dy;
+      uint16_t lowest = kPad;
+      if (px < 0 || px >= cols || py < 0 || py >= rows) {
+        for (int d = 0; d < planes; ++d) l[d] = c[d];
+      } else {
+        const uint16_t* __restrict q =
+            dy == 0 ? &current[px * stride + 1] : &previous[px * stride + 1];
+        const uint16_t q_min = dy == 0 ? current_min[px] : previous_min[px];
+        const uint16_t jump = static_cast<uint16_t>(q_min + p2), small = static_cast<uint16_t>(p1);
+        for (int d = 0; d < planes; ++d) {
+          uint16_t v = std::min(q[d], jump);
+          v = std::min(v, static_cast<uint16_t>(std::min(q[d - 1], q[d + 1]) + small));
+          l[d] = static_cast<uint16_t>(c[d] + v - q_min);
+        }
+      }
+      for (int d = 0; d < planes; ++d) {
+        lowest = std::min(lowest, l[d]);
+        s[d] = static_cast<uint16_t>(s[d] + l[d]);
+      }
+      current_min[x] = lowest;
+    }
+    std::swap(previous, current);
+    std::swap(previous_min, current_min);
+  }
+}
+
+
+}  // namespace gf::sweep_detail
