@@ -1,0 +1,393 @@
+#include "surfels/fusion.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "acquisition/errors.h"
+
+namespace gf {
+namespace {
+
+constexpr uint64_t kEmpty = std::numeric_limits<uint64_t>::max();
+constexpr double kDegToRad = M_PI / 180.0;
+
+// Packs a positive depth and a surfel index so that the smaller value is the nearer surfel.
+uint64_t Pack(float z, uint32_t index) {
+  uint32_t bits;
+  std::memcpy(&bits, &z, sizeof(bits));  // positive floats order as their bits do
+  return (static_cast<uint64_t>(bits) << 32) | index;
+}
+
+// One measured pixel after association.
+struct PixelResult {
+  int match = -1;  // surfel index, -1 none
+  bool valid = false;
+  Eigen::Vector3f point, normal;  // camera frame
+  float radius = 0, weight = 0;
+  uint8_t red = 0, green = 0, blue = 0;
+  DepthSource source = DepthSource::kSensor;
+};
+
+}  // namespace
+
+struct SurfelFusion::Measurement {
+  const cv::Mat& depth;   // CV_32F metres
+  const cv::Mat& mask;    // CV_8U pixels to fuse (empty: every valid one)
+  const cv::Mat& weight;  // CV_32F per-pixel weight (empty: 1)
+  double weight_scale;    // times every weight (fill_weight for fills)
+  DepthSource source;
+  const cv::Mat& color;  // CV_8UC3 BGR (may be empty)
+  SE3 world_from_camera;
+  int keyframe;
+  bool time_step;  // a sensor frame: cleanup follows
+  int grid_offset;
+};
+
+bool FusionOptions::Check(std::string* message) const {
+  auto fail = [&](const char* m) {
+    if (message) *message = m;
+    return false;
+  };
+  if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m))
+    return fail("fusion: need 0 < min_depth_m < max_depth_m");
+  if (pixel_step < 1 || !(max_depth_gap_m > 0) || !(max_normal_angle_deg > 0) ||
+      !(max_normal_angle_deg <= 90) || !(max_radius_ratio > 0) || !(confidence_sigma > 0))
+    return fail("fusion: pixel_step >= 1, positive gap, angle in (0, 90], positive ratio, sigma");
+  if (!(stable_confidence > 0) || unstable_frames < 1 || !(fill_weight > 0) ||
+      !(fill_stable_confidence > 0) || fill_unstable_frames < 1)
+    return fail("fusion: positive stable confidences, windows and fill weight");
+  if (normal_filter_px < 1 || !(normal_filter_depth_m > 0) || normal_baseline_px < 1)
+    return fail("fusion: the normals' filter needs a positive size and depth scale");
+  if (!(free_space_margin >= 0) || !(free_space_penalty >= 0) || !(max_neighbour_step > 0))
+    return fail("fusion: free-space margin and penalty >= 0, positive neighbour step");
+  return true;
+}
+
+std::string FusionStats::BriefReport() const {
+  char buffer[200];
+  std::snprintf(buffer, sizeof(buffer),
+                "fusion: %d pixels, %d merged, %d new, %d removed (%d seen through), %.1f ms",
+                measured, merged, created, removed, contradicted, ms);
+  return buffer;
+}
+
+long SurfelCounts::total_stable() const {
+  long n = 0;
+  for (long c : stable) n += c;
+  return n;
+}
+
+SurfelFusion::SurfelFusion(const Camera& camera, const FusionOptions& options)
+    : camera_(camera), options_(options), rays_(camera) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+  index_map_.assign(static_cast<size_t>(camera.width) * camera.height, kEmpty);
+}
+
+FusionStats SurfelFusion::FuseFrame(const RgbdFrame& frame, const SE3& world_from_camera,
+                                    int keyframe) {
+  GF_CHECK(frame.depth.type() == CV_32FC1 && frame.depth.cols == camera_.width &&
+               frame.depth.rows == camera_.height,
+           "fusion: depth must be CV_32F of the camera's size");
+  ++frame_;
+  const cv::Mat none;
+  return Fuse({frame.depth, none, none, 1.0, DepthSource::kSensor, frame.color, world_from_camera,
+               keyframe, true, frame_ % options_.pixel_step});
+}
+
+FusionStats SurfelFusion::FuseFill(const RgbdFrame& frame, const cv::Mat& filled_depth,
+                                   const cv::Mat& fill_mask, const cv::Mat& confidence,
+                                   DepthSource source, const SE3& world_from_camera, int keyframe) {
+  GF_CHECK(
+      filled_depth.type() == CV_32FC1 && fill_mask.type() == CV_8UC1 &&
+          confidence.type() == CV_32FC1 && filled_depth.cols == camera_.width &&
+          filled_depth.rows == camera_.height && fill_mask.size() == filled_depth.size() &&
+          confidence.size() == filled_depth.size(),
+      "fusion: a fill needs CV_32F depth and confidence and a CV_8U mask of the camera's size");
+  ++fills_;
+  return Fuse({filled_depth, fill_mask, confidence, options_.fill_weight, source, frame.color,
+               world_from_camera, keyframe, false, fills_ % options_.pixel_step});
+}
+
+void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
+  std::fill(index_map_.begin(), index_map_.end(), kEmpty);
+  in_camera_.resize(map_.size());
+  pixel_of_.assign(map_.size(), -1);
+  const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
+  const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
+  // Depth and index packed into one 64-bit word, so that the nearest surfel per pixel is an atomic
+  // minimum (projection runs in parallel).
+  auto* cells = reinterpret_cast<std::atomic<uint64_t>*>(index_map_.data());
+  static_assert(sizeof(std::atomic<uint64_t>) == sizeof(uint64_t), "atomic words");
+  const int width = camera_.width, height = camera_.height;
+  cv::parallel_for_(cv::Range(0, static_cast<int>(map_.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      const Surfel& s = map_[i];
+      if (s.removed()) continue;
+      const Eigen::Vector3f q = r * s.position + t;
+      in_camera_[i] = q;
+      if (q.z() < options_.min_depth_m * 0.5) continue;
+      const Eigen::Vector2d uv = camera_.ProjectDistorted(q.cast<double>());
+      const int x = static_cast<int>(std::lround(uv.x())),
+                y = static_cast<int>(std::lround(uv.y()));
+      if (x < 0 || y < 0 || x >= width || y >= height) continue;
+      const int pixel = y * width + x;
+      pixel_of_[i] = pixel;
+      const uint64_t packed = Pack(q.z(), static_cast<uint32_t>(i));
+      uint64_t old = cells[pixel].load(std::memory_order_relaxed);
+      while (packed < old &&
+             !cells[pixel].compare_exchange_weak(old, packed, std::memory_order_relaxed)) {
+      }
+    }
+  });
+}
+
+FusionStats SurfelFusion::Fuse(const Measurement& m) {
+  const auto start = std::chrono::steady_clock::now();
+  FusionStats stats;
+  const SE3 camera_from_world = m.world_from_camera.Inverse();
+  ProjectMap(camera_from_world);
+  const Eigen::Matrix3f r_cw = camera_from_world.RotationMatrix().cast<float>();
+  const int width = camera_.width, height = camera_.height, step = options_.pixel_step;
+  const int grid_cols = (width - m.grid_offset + step - 1) / step;
+  const int grid_rows = (height - m.grid_offset + step - 1) / step;
+  std::vector<PixelResult> results(static_cast<size_t>(grid_cols) * grid_rows);
+  const float cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * kDegToRad));
+  const float focal = static_cast<float>(0.5 * (camera_.fx + camera_.fy));
+  const float half_diagonal = 0.5f * std::hypot(float(width), float(height));
+  const float two_sigma2 =
+      static_cast<float>(2 * options_.confidence_sigma * options_.confidence_sigma);
+  const float min_z = static_cast<float>(options_.min_depth_m),
+              max_z = static_cast<float>(options_.max_depth_m);
+  const float max_step = static_cast<float>(options_.max_neighbour_step);
+  const float gap = static_cast<float>(options_.max_depth_gap_m);
+  const bool has_color = m.color.type() == CV_8UC3 && m.color.size() == m.depth.size();
+  // Normals (and radii) from the depth smoothed by a bilateral filter, as ElasticFusion does: the
+  // sensor's quantised depth makes neighbour differences too noisy for the normal test (at 3 m a
+  // Kinect v1 depth step is about 3 cm). The filter runs on the depth at half size (normals span
+  // normal_baseline_px either side); positions come from the measured depth.
+  cv::Mat half, smooth_half;
+  cv::resize(m.depth, half, {}, 0.5, 0.5, cv::INTER_NEAREST);
+  cv::bilateralFilter(half, smooth_half, options_.normal_filter_px, options_.normal_filter_depth_m,
+                      0.5 * options_.normal_filter_px);
+  auto smooth_vertex = [&](int x, int y) -> Eigen::Vector3f {
+    const float z = smooth_half.at<float>(std::min(y / 2, smooth_half.rows - 1),
+                                          std::min(x / 2, smooth_half.cols - 1));
+    const Eigen::Vector2d n = rays_.Ray(x, y);
+    return Eigen::Vector3f(static_cast<float>(n.x()) * z, static_cast<float>(n.y()) * z, z);
+  };
+  auto vertex = [&](const cv::Mat& depth, int x, int y) -> Eigen::Vector3f {
+    const float z = depth.at<float>(y, x);
+    const Eigen::Vector2d n = rays_.Ray(x, y);
+    return Eigen::Vector3f(static_cast<float>(n.x()) * z, static_cast<float>(n.y()) * z, z);
+  };
+  cv::parallel_for_(cv::Range(0, grid_rows), [&](const cv::Range& range) {
+    for (int gy = range.start; gy < range.end; ++gy) {
+      const int y = m.grid_offset + gy * step;
+      if (y < 1 || y + 1 >= height) continue;
+      for (int gx = 0; gx < grid_cols; ++gx) {
+        const int x = m.grid_offset + gx * step;
+        if (x < 1 || x + 1 >= width) continue;
+        if (!m.mask.empty() && !m.mask.at<uint8_t>(y, x)) continue;
+        const float z = m.depth.at<float>(y, x);
+        if (!(z >= min_z && z <= max_z)) continue;
+        // A normal needs all four neighbours on the same surface.
+        bool neighbours = true;
+        for (const auto& [dx, dy] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
+          const float zn = m.depth.at<float>(y + dy, x + dx);
+          neighbours &= zn > 0 && std::abs(zn - z) <= max_step * z;
+        }
+        if (!neighbours) continue;
+        PixelResult& res = results[static_cast<size_t>(gy) * grid_cols + gx];
+        res.point = vertex(m.depth, x, y);
+        const int b = options_.normal_baseline_px;
+        if (x < b || y < b || x + b >= width || y + b >= height) continue;
+        Eigen::Vector3f n = (smooth_vertex(x + b, y) - smooth_vertex(x - b, y))
+                                .cross(smooth_vertex(x, y + b) - smooth_vertex(x, y - b));
+        if (!(n.norm() > 0)) continue;
+        n.normalize();
+        if (n.dot(res.point) > 0) n = -n;  // facing the camera
+        res.normal = n;
+        const float head_on = std::sqrt(2.f) * z / focal;
+        res.radius = std::min(2.f * head_on, head_on / std::max(std::abs(n.z()), 1e-3f));
+        const float rr = std::hypot(x - float(camera_.cx), y - float(camera_.cy)) / half_diagonal;
+        const float pixel_weight = m.weight.empty() ? 1.f : m.weight.at<float>(y, x);
+        res.weight =
+            std::exp(-rr * rr / two_sigma2) * pixel_weight * static_cast<float>(m.weight_scale);
+        if (!(res.weight > 0)) continue;
+        if (has_color) {
+          const cv::Vec3b c = m.color.at<cv::Vec3b>(y, x);
+          res.red = c[2], res.green = c[1], res.blue = c[0];
+        }
+        res.source = m.source;
+        res.valid = true;
+        // The surfel in the 3x3 index-map window nearest the pixel's ray, within the depth gap
+        // along it and with a normal within the angle.
+        const Eigen::Vector3f ray = res.point / z;
+        const float lambda = ray.norm();
+        float best = std::numeric_limits<float>::max();
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const uint64_t packed = index_map_[static_cast<size_t>(y + dy) * width + x + dx];
+            if (packed == kEmpty) continue;
+            const uint32_t id = static_cast<uint32_t>(packed & 0xffffffffu);
+            const Eigen::Vector3f& q = in_camera_[id];
+            if (std::abs(q.z() - z) * lambda >= gap) continue;
+            if ((r_cw * map_[id].normal).dot(n) < cos_max) continue;
+            const float dist = ray.cross(q).norm() / lambda;
+            if (dist < best) {
+              best = dist;
+              res.match = static_cast<int>(id);
+            }
+          }
+      }
+    }
+  });
+  // Merge and create, one pixel after the other (several pixels may update one surfel).
+  const Eigen::Matrix3f r_wc = m.world_from_camera.RotationMatrix().cast<float>();
+  const Eigen::Vector3f t_wc = m.world_from_camera.translation().cast<float>();
+  for (const PixelResult& res : results) {
+    if (!res.valid) continue;
+    ++stats.measured;
+    const Eigen::Vector3f p = r_wc * res.point + t_wc, n = r_wc * res.normal;
+    if (res.match >= 0) {
+      Surfel& s = map_[res.match];
+      const float c = s.confidence, a = res.weight, sum = c + a;
+      if (res.radius < options_.max_radius_ratio * s.radius) {
+        s.position = (c * s.position + a * p) / sum;
+        s.normal = ((c * s.normal + a * n) / sum).normalized();
+        s.radius = (c * s.radius + a * res.radius) / sum;
+        s.red = static_cast<uint8_t>(std::lround((c * s.red + a * res.red) / sum));
+        s.green = static_cast<uint8_t>(std::lround((c * s.green + a * res.green) / sum));
+        s.blue = static_cast<uint8_t>(std::lround((c * s.blue + a * res.blue) / sum));
+      }
+      s.confidence = sum;
+      s.last_frame = frame_;
+      s.keyframe = m.keyframe;
+      ++stats.merged;
+    } else {
+      Surfel s;
+      s.position = p;
+      s.normal = n;
+      s.radius = res.radius;
+      s.confidence = res.weight;
+      s.first_frame = s.last_frame = frame_;
+      s.keyframe = m.keyframe;
+      s.red = res.red, s.green = res.green, s.blue = res.blue;
+      s.source = static_cast<uint8_t>(res.source);
+      map_.Add(s);
+      ++stats.created;
+    }
+  }
+  if (m.time_step) CleanUp(m, &stats);
+  stats.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return stats;
+}
+
+void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
+  // Free space: the surfels projected into this frame (those created just now were not) that the
+  // sensor sees through: every measured depth in the 3x3 pixels around theirs lies farther by more
+  // than free_space_margin, and at least five of them are measured.
+  const size_t projected = pixel_of_.size();
+  std::vector<uint8_t> seen_through(projected, 0);
+  const int width = camera_.width, height = camera_.height;
+  const float margin = static_cast<float>(1.0 + options_.free_space_margin);
+  cv::parallel_for_(cv::Range(0, static_cast<int>(projected)), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      const int pixel = pixel_of_[i];
+      if (pixel < 0 || map_[i].removed() || map_[i].last_frame == frame_) continue;
+      const int x = pixel % width, y = pixel / width;
+      if (x < 1 || y < 1 || x + 1 >= width || y + 1 >= height) continue;
+      const float z = in_camera_[i].z();
+      int measured = 0;
+      bool behind = true;
+      for (int dy = -1; dy <= 1 && behind; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const float d = m.depth.at<float>(y + dy, x + dx);
+          if (!(d > 0)) continue;
+          ++measured;
+          if (d <= z * margin) {
+            behind = false;
+            break;
+          }
+        }
+      seen_through[i] = behind && measured >= 5;
+    }
+  });
+  for (size_t i = 0; i < projected; ++i) {
+    if (!seen_through[i]) continue;
+    Surfel& s = map_[i];
+    ++stats->contradicted;
+    const bool stable_sensor =
+        s.source == static_cast<uint8_t>(DepthSource::kSensor) && IsStable(s);
+    s.confidence -= static_cast<float>(options_.free_space_penalty);
+    if (!stable_sensor || s.confidence <= 0) {
+      map_.Remove(i);
+      ++stats->removed;
+    }
+  }
+  // Unstable surfels that nothing confirmed in time.
+  for (size_t i = 0; i < map_.size(); ++i) {
+    const Surfel& s = map_[i];
+    if (s.removed() || IsStable(s)) continue;
+    const bool fill = s.source != static_cast<uint8_t>(DepthSource::kSensor);
+    const int window = fill ? options_.fill_unstable_frames : options_.unstable_frames;
+    if (frame_ - s.last_frame > window) {
+      map_.Remove(i);
+      ++stats->removed;
+    }
+  }
+  map_.Compact();
+}
+
+bool SurfelFusion::IsStable(const Surfel& s) const {
+  if (s.removed()) return false;
+  return s.source == static_cast<uint8_t>(DepthSource::kSensor)
+             ? s.confidence >= options_.stable_confidence
+             : s.confidence >= options_.fill_stable_confidence;
+}
+
+std::vector<Surfel> SurfelFusion::StableSurfels() const {
+  std::vector<Surfel> out;
+  for (const Surfel& s : map_.surfels())
+    if (IsStable(s)) out.push_back(s);
+  return out;
+}
+
+SurfelCounts SurfelFusion::Counts() const {
+  SurfelCounts c;
+  for (const Surfel& s : map_.surfels()) {
+    if (s.removed()) continue;
+    const size_t k = std::min<size_t>(s.source, 4);
+    if (IsStable(s)) {
+      ++c.stable[k];
+      c.stable_area_m2[k] += M_PI * s.radius * s.radius;
+    } else {
+      ++c.unstable[k];
+    }
+  }
+  return c;
+}
+
+size_t SurfelFusion::MemoryBytes() const {
+  return map_.surfels().capacity() * sizeof(Surfel) + index_map_.capacity() * sizeof(uint64_t) +
+         in_camera_.capacity() * sizeof(Eigen::Vector3f) + pixel_of_.capacity() * sizeof(int32_t);
+}
+
+void SurfelMap::Compact(double share) {
+  if (removed_ == 0 || removed_ < share * surfels_.size()) return;
+  surfels_.erase(
+      std::remove_if(surfels_.begin(), surfels_.end(), [](const Surfel& s) { return s.removed(); }),
+      surfels_.end());
+  removed_ = 0;
+}
+
+}  // namespace gf

@@ -1,0 +1,135 @@
+// Surfel fusion (Keller et al. 2013; ElasticFusion's data.vert, update.vert and copy_unstable.vert
+// on the CPU): every tracked frame's depth, and every keyframe's stereo fill, merged into one map.
+//
+// Per measurement (a frame, or a keyframe's filled pixels):
+//  1. the map's surfels are projected into the camera at the measurement's pose, the nearest per
+//     pixel kept (the projected index map);
+//  2. each measured pixel (every pixel_step-th each way, the offset alternating between frames)
+//     with a vertex and normal looks for a surfel in the 3x3 index-map pixels around it: within
+//     max_depth_gap_m along its ray, normals within max_normal_angle_deg; the one nearest the ray
+//     wins;
+//  3. a match is merged by confidence-weighted averaging of position, normal, colour and radius
+//     when the measurement's radius is under max_radius_ratio times the surfel's (a closer, finer
+//     view), else only its confidence and time are updated; a pixel without a match starts a new,
+//     unstable surfel. A measurement's weight is exp(-r^2 / (2 confidence_sigma^2)), r its distance
+//     from the image centre over the half diagonal, times the pixel's own weight (a fill's
+//     confidence times fill_weight);
+//  4. after a sensor frame: a surfel that the sensor sees through (every measured depth around its
+//     pixel farther than it by free_space_margin) loses confidence (unstable surfels and fills are
+//     removed); unstable surfels not updated for unstable_frames frames are removed, unconfirmed
+//     fills after fill_unstable_frames.
+// Radius: sqrt(2) z / f / |n_z|, at most twice the head-on radius. Fills count fill_weight of a
+// sensor measurement, so one keyframe's fill alone never reaches fill_stable_confidence: a fill
+// becomes part of the model only when other keyframes' fills or the sensor confirm it.
+//
+// Per-pixel and per-surfel loops run in parallel through cv::parallel_for_ (the caller's
+// cv::setNumThreads decides how many threads); the object itself owns no thread.
+//
+// Usage:
+//   gf::SurfelFusion fusion(camera, {});
+//   for (each tracked frame) fusion.FuseFrame(frame, world_from_camera, keyframe_id);
+//   for (each filled keyframe) fusion.FuseFill(frame, filled_depth, fill_mask, confidence,
+//                                              gf::DepthSource::kStereo, world_from_keyframe, id);
+//   gf::WriteSurfelPly("map.ply", fusion.StableSurfels());
+#pragma once
+
+#include <array>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "acquisition/camera.h"
+#include "acquisition/rgbd_frame.h"
+#include "acquisition/se3.h"
+#include "surfels/surfel_map.h"
+
+namespace gf {
+
+struct FusionOptions {
+  double min_depth_m = 0.3;       // measurements outside [min_depth_m, max_depth_m] are not fused
+  double max_depth_m = 4.0;       // (Kinect noise grows with the square of depth)
+  int pixel_step = 2;             // fuse every pixel_step-th pixel each way (1: every pixel)
+  double max_depth_gap_m = 0.05;  // association: surfel within this along the ray, metres
+  double max_normal_angle_deg = 30.0;    // ... and normals within this, degrees
+  double max_radius_ratio = 1.5;         // merge geometry only when the measured radius is smaller
+  double confidence_sigma = 0.6;         // radial weight's sigma, in half image diagonals
+  double stable_confidence = 10.0;       // a sensor surfel is stable from this confidence
+  int unstable_frames = 20;              // unstable surfels not updated this many frames go
+  double fill_weight = 0.5;              // a filled pixel's weight relative to a sensor pixel's
+  double fill_stable_confidence = 0.75;  // a fill is confirmed (stable) from this confidence
+  int fill_unstable_frames = 90;         // unconfirmed fills older than this many frames go
+  double free_space_margin = 0.03;       // relative depth by which the sensor must see past a
+                                         // surfel to contradict it
+  double free_space_penalty = 1.0;       // confidence a stable surfel loses per contradiction
+  double max_neighbour_step = 0.05;      // normals only from neighbours within this relative step
+  // Normals come from the depth smoothed by a bilateral filter at half size: its diameter in
+  // half-size pixels and its depth sigma in metres; then from the smoothed depth this many
+  // full-size pixels either side.
+  int normal_filter_px = 5;
+  double normal_filter_depth_m = 0.05;
+  int normal_baseline_px = 2;
+  bool Check(std::string* message = nullptr) const;
+};
+
+// What one fusion step did.
+struct FusionStats {
+  int measured = 0;      // pixels considered
+  int merged = 0;        // ... that updated a surfel
+  int created = 0;       // ... that started one
+  int removed = 0;       // surfels removed after the step
+  int contradicted = 0;  // surfels the sensor saw through
+  double ms = 0;
+  std::string BriefReport() const;
+};
+
+// Surfel counts and area by source (index: DepthSource).
+struct SurfelCounts {
+  std::array<long, 5> stable{};            // surfels that reached their source's stable confidence
+  std::array<long, 5> unstable{};          // ... that have not
+  std::array<double, 5> stable_area_m2{};  // sum of pi r^2 of the stable ones
+  long total_stable() const;
+};
+
+class SurfelFusion {
+ public:
+  // Throws std::logic_error when options.Check() fails.
+  SurfelFusion(const Camera& camera, const FusionOptions& options);
+
+  // A tracked frame's sensor depth (frame.depth, metres; colour when it has it), one time step.
+  FusionStats FuseFrame(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe);
+  // A keyframe's fill: the pixels of `fill_mask` (CV_8U) of `filled_depth` (CV_32F metres: the
+  // sensor's depth plus the fill, for normals across the patch border), each weighted by
+  // `confidence` (CV_32F in [0, 1]) and tagged `source`. Not a time step.
+  FusionStats FuseFill(const RgbdFrame& frame, const cv::Mat& filled_depth,
+                       const cv::Mat& fill_mask, const cv::Mat& confidence, DepthSource source,
+                       const SE3& world_from_camera, int keyframe);
+
+  const SurfelMap& map() const { return map_; }
+  bool IsStable(const Surfel& s) const;
+  // The stable surfels (the model), in map order.
+  std::vector<Surfel> StableSurfels() const;
+  SurfelCounts Counts() const;
+  int frames() const { return frame_; }
+  // Bytes the map holds (capacity), for the memory figures.
+  size_t MemoryBytes() const;
+
+ private:
+  struct Measurement;
+  FusionStats Fuse(const Measurement& m);
+  void ProjectMap(const SE3& camera_from_world);
+  void CleanUp(const Measurement& m, FusionStats* stats);
+
+  Camera camera_;
+  FusionOptions options_;
+  UndistortedPixels rays_;
+  SurfelMap map_;
+  int frame_ = 0;  // time steps (sensor frames) so far
+  int fills_ = 0;  // fills fused so far (their pixel grid offset alternates too)
+  // Per fusion step: the projected index map (nearest surfel per pixel, packed depth and index),
+  // and each projected surfel's position in the camera and pixel.
+  std::vector<uint64_t> index_map_;
+  std::vector<Eigen::Vector3f> in_camera_;
+  std::vector<int32_t> pixel_of_;  // y * width + x, -1 when not in the image
+};
+
+}  // namespace gf

@@ -1,0 +1,67 @@
+// The surfel map: the scene as a set of small oriented discs (Keller et al. 2013, ElasticFusion),
+// each fused from every measurement that saw it.
+//
+// A surfel keeps its position and normal in the world frame, its radius, colour, confidence (the
+// accumulated weight of the measurements fused into it), the frames that created and last updated
+// it, the keyframe it belongs to (to move it with a pose correction) and its source: the sensor, a
+// stereo fill, or a fill carried from other keyframes (acquisition/depth.h's DepthSource). A
+// surfel is stable once its confidence reaches the threshold of its source (fusion.h); unstable
+// surfels are candidates that more measurements must confirm.
+//
+// Surfels are removed by marking them (confidence < 0) and compacting once enough are marked, so
+// indices stay valid within one fusion step.
+//
+// Thread-safety: none; the fusion stage owns the map.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "acquisition/depth.h"
+
+namespace gf {
+
+struct Surfel {
+  Eigen::Vector3f position;  // world frame, metres
+  Eigen::Vector3f normal;    // world frame, unit, facing the cameras that saw it
+  float radius = 0;          // metres
+  float confidence = 0;      // accumulated measurement weight; < 0: removed
+  int32_t first_frame = 0;   // frame (fusion step) that created it
+  int32_t last_frame = 0;    // ... that last updated it
+  int32_t keyframe = -1;     // the keyframe it belongs to (-1: none yet)
+  uint8_t red = 0, green = 0, blue = 0;
+  uint8_t source = static_cast<uint8_t>(DepthSource::kSensor);  // DepthSource of its creator
+  bool removed() const { return confidence < 0; }
+};
+static_assert(sizeof(Surfel) <= 48, "a surfel should stay within 48 bytes");
+
+class SurfelMap {
+ public:
+  size_t size() const { return surfels_.size(); }  // including surfels marked removed
+  size_t live() const { return surfels_.size() - removed_; }
+  const Surfel& operator[](size_t i) const { return surfels_[i]; }
+  Surfel& operator[](size_t i) { return surfels_[i]; }
+  const std::vector<Surfel>& surfels() const { return surfels_; }
+
+  void Add(const Surfel& s) { surfels_.push_back(s); }
+  void Remove(size_t i) {
+    if (!surfels_[i].removed()) {
+      surfels_[i].confidence = -1;
+      ++removed_;
+    }
+  }
+  // Drops the surfels marked removed when they are more than `share` of the map (keeps order).
+  void Compact(double share = 0.1);
+  void Clear() {
+    surfels_.clear();
+    removed_ = 0;
+  }
+
+ private:
+  std::vector<Surfel> surfels_;
+  size_t removed_ = 0;
+};
+
+}  // namespace gf
