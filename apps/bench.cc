@@ -90,7 +90,7 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
                                        const BenchOptions& options) {
   const int threads = cv::getNumThreads();
   cv::setNumThreads(1);
-  KeyframeFiller filler(camera, options.fill.Filler());
+  KeyframeFiller filler(camera, options.pipeline.fill_options.Filler());
   std::vector<double> pair_ms, fill_ms, carry_ms, sgbm_ms;
   long long holes = 0, filled = 0, filled_with_carry = 0;
   int unpaired = 0, failed = 0;
@@ -110,8 +110,9 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
     ++methods[r.method.empty() ? r.termination : r.method];
     ++paths[r.path];
     if (r.rectification.usable) {
-      const std::optional<double> ms = TimeOpenCvSgbm(k.key->frame, k.partner->frame, camera,
-                                                      r.rectification, options.fill.stereo.sgbm);
+      const std::optional<double> ms =
+          TimeOpenCvSgbm(k.key->frame, k.partner->frame, camera, r.rectification,
+                         options.pipeline.fill_options.stereo.sgbm);
       if (ms) sgbm_ms.push_back(*ms);
     }
   };
@@ -157,7 +158,7 @@ bool BenchOptions::Check(std::string* message) const {
     if (message) *message = "need --fill-every >= 0";
     return false;
   }
-  return source.Check(message) && tracker.Check(message) && fill.Check(message);
+  return source.Check(message) && pipeline.Check(message);
 }
 
 nlohmann::ordered_json RunBench(const BenchOptions& options) {
@@ -190,7 +191,7 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   std::vector<MethodResult> results;
   {
     MethodResult ours{"glassfusion frame-to-keyframe ICP", {}, {}, 0};
-    FrameToKeyframeTracker tracker(camera, options.tracker);
+    FrameToKeyframeTracker tracker(camera, options.pipeline.tracker);
     TerminalProgress progress("bench: glassfusion", static_cast<int>(frames.size()));
     for (const RgbdFrame& f : frames) {
       const auto t0 = Clock::now();
@@ -257,7 +258,7 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   for (const MethodResult& m : results)
     out["methods"].push_back(Summarise(m, gt.empty() ? nullptr : &gt));
   if (!stereo_fill.is_null()) out["stereo_fill"] = stereo_fill;
-  out["settings"] = SettingsToJson(options.tracker, options.fill);
+  out["settings"] = SettingsToJson(options.pipeline);
   return out;
 }
 

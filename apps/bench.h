@@ -17,7 +17,7 @@
 #include <string>
 
 #include "acquisition/frame_source.h"
-#include "pipeline/fill_stage.h"
+#include "pipeline/reconstruction.h"
 #include "registration/tracker.h"
 
 namespace gf {
@@ -33,8 +33,9 @@ struct BenchOptions {
   // tracked poses; next to OpenCV's StereoSGBM alone on the same rectified sideways pairs.
   int fill_every = 0;
   FrameSourceOptions source;
-  TrackerOptions tracker;  // ours, as reconstruct runs it (--config FILE may change both)
-  FillStageOptions fill;   // pairs, stereo (also the OpenCV SGBM peer's settings) and carry
+  // Ours, as reconstruct runs them (--config FILE may change them): the tracker, the fill (pairs,
+  // stereo, also the OpenCV SGBM peer's settings, carry) and the fusion.
+  ReconstructionOptions pipeline;
   bool Check(std::string* message = nullptr) const;
 };
 

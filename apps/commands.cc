@@ -94,7 +94,9 @@ void RegisterCommands(CLI::App& app) {
     cmd->add_option("--out", options->out_dir, "run folder")->required();
     cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
     auto no_fill = std::make_shared<bool>(false);
-    cmd->add_flag("--no-fill", *no_fill, "track only: no stereo hole filling of keyframes");
+    cmd->add_flag("--no-fill", *no_fill, "no stereo hole filling of keyframes (sensor depth only)");
+    auto no_fusion = std::make_shared<bool>(false);
+    cmd->add_flag("--no-fusion", *no_fusion, "no surfel map (map.ply)");
     auto sweep_all = std::make_shared<bool>(false);
     cmd->add_flag("--sweep-all", *sweep_all,
                   "plane-sweep every keyframe pair (default: rectified SGBM for sideways pairs, "
@@ -107,12 +109,11 @@ void RegisterCommands(CLI::App& app) {
                   "refused)");
     cmd->add_flag("--allow-lost", options->allow_lost,
                   "accept a run that loses tracking on most frames (exit 0 with a warning)");
-    cmd->callback([options, args, range, no_fill, sweep_all] {
-      if (!options->config_file.empty())
-        ApplyConfigFile(options->config_file, &options->pipeline.tracker,
-                        &options->pipeline.fill_options);
+    cmd->callback([options, args, range, no_fill, no_fusion, sweep_all] {
+      if (!options->config_file.empty()) ApplyConfigFile(options->config_file, &options->pipeline);
       if (*sweep_all) options->pipeline.fill_options.stereo.plane_sweep_always = true;
       options->pipeline.fill = !*no_fill;
+      options->pipeline.fusion = !*no_fusion;
       options->input = args->input;
       options->source = args->ToOptions();
       options->source.load_color = options->pipeline.tracker.use_features || options->pipeline.fill;
@@ -146,7 +147,7 @@ void RegisterCommands(CLI::App& app) {
     cmd->add_option("--config", *config,
                     "JSON file of tracker and fill settings, as for reconstruct");
     cmd->callback([options, args, range, no_peers, config] {
-      if (!config->empty()) ApplyConfigFile(*config, &options->tracker, &options->fill);
+      if (!config->empty()) ApplyConfigFile(*config, &options->pipeline);
       options->input = args->input;
       options->source = args->ToOptions();
       options->peers = !*no_peers;

@@ -86,9 +86,7 @@ void RunDemo(const DemoOptions& options) {
   // The reconstruction's settings first: a bad config file stops the demo before it writes.
   ReconstructOptions reconstruct;
   reconstruct.config_file = options.config_file;
-  if (!options.config_file.empty())
-    ApplyConfigFile(options.config_file, &reconstruct.pipeline.tracker,
-                    &reconstruct.pipeline.fill_options);
+  if (!options.config_file.empty()) ApplyConfigFile(options.config_file, &reconstruct.pipeline);
   std::error_code ec;
   fs::create_directories(options.out_dir, ec);
   if (ec) throw InputError(options.out_dir, "cannot create output folder: " + ec.message());

@@ -25,8 +25,13 @@ KeyframeFillerOptions FillStageOptions::Filler() const {
   return f;
 }
 
-FillStage::FillStage(const Camera& camera, const FillStageOptions& options, RunSink* sink)
-    : camera_(camera), options_(options), sink_(sink), queue_(options.queue_capacity) {
+FillStage::FillStage(const Camera& camera, const FillStageOptions& options, RunSink* sink,
+                     FusionStage* fusion)
+    : camera_(camera),
+      options_(options),
+      sink_(sink),
+      fusion_(fusion),
+      queue_(options.queue_capacity) {
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
   GF_CHECK(sink != nullptr, "the fill stage needs a sink");
@@ -90,6 +95,7 @@ void FillStage::Write(const FilledKeyframe& k) {
   if (r.carried_pixels + r.corrected_pixels > 0)
     spdlog::debug("fill {}: {}", r.timestamp, k.fill.BriefReport());
   sink_->WriteKeyframe(r.timestamp, k.key->frame, k.fill);  // a write failure stops the stage
+  if (fusion_) fusion_->OfferFill(k, k.key->id);
   std::lock_guard<std::mutex> lock(done_mutex_);
   done_.push_back(r);
   ++done_count_;

@@ -28,6 +28,7 @@
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
 #include "pipeline/bounded_queue.h"
+#include "pipeline/fusion_stage.h"
 #include "pipeline/run_sink.h"
 #include "pipeline/stage_thread.h"
 #include "sfm/keyframe_filler.h"
@@ -55,8 +56,10 @@ nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, in
 
 class FillStage {
  public:
-  // `sink` must outlive the stage.
-  FillStage(const Camera& camera, const FillStageOptions& options, RunSink* sink);
+  // `sink` and `fusion` (may be null: no map) must outlive the stage; each filled keyframe goes to
+  // the fusion stage after it is written.
+  FillStage(const Camera& camera, const FillStageOptions& options, RunSink* sink,
+            FusionStage* fusion = nullptr);
   ~FillStage();  // cancels and joins if Finish() was not called
   FillStage(const FillStage&) = delete;
   FillStage& operator=(const FillStage&) = delete;
@@ -86,6 +89,7 @@ class FillStage {
   Camera camera_;
   FillStageOptions options_;
   RunSink* sink_;
+  FusionStage* fusion_;
   BoundedQueue<Offered> queue_;
   mutable std::mutex done_mutex_;
   std::vector<KeyframeFill> done_;  // written by the worker

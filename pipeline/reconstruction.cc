@@ -25,7 +25,7 @@ json StageStats(std::vector<double> ms) {
 
 // report.json (DESIGN.md's keys).
 json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
-                const TrackingRecord& tracking, const FillStage* fill,
+                const TrackingRecord& tracking, const FillStage* fill, const FusionStage* fusion,
                 const ReconstructionSummary& summary) {
   json report;
   report["complete"] = summary.complete;
@@ -34,12 +34,15 @@ json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
                      {"kind", source.Kind()},
                      {"first_frame", options.first_frame},
                      {"end_frame", options.end_frame}};
-  report["config"] = {{"tracker", "frame_to_keyframe_icp"},
-                      {"stereo_fill", options.fill},
-                      {"threads", options.fill ? "reader + tracker + stereo" : "reader + tracker"},
-                      {"hardware_concurrency", std::thread::hardware_concurrency()},
-                      {"file", options.config_file.empty() ? json() : json(options.config_file)},
-                      {"settings", SettingsToJson(options.tracker, options.fill_options)}};
+  report["config"] = {
+      {"tracker", "frame_to_keyframe_icp"},
+      {"stereo_fill", options.fill},
+      {"surfel_fusion", options.fusion},
+      {"threads", std::string("reader + tracker") + (options.fill ? " + stereo" : "") +
+                      (options.fusion ? " + fusion" : "")},
+      {"hardware_concurrency", std::thread::hardware_concurrency()},
+      {"file", options.config_file.empty() ? json() : json(options.config_file)},
+      {"settings", SettingsToJson(options)}};
   report["frames"] = summary.frames;
   report["fps"] = summary.fps;
   report["seconds"] = summary.seconds;
@@ -51,11 +54,16 @@ json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
       if (!k.partner.empty()) stereo_ms.push_back(k.ms);
     report["stages"]["stereo"] = StageStats(stereo_ms);
   }
+  if (fusion) {
+    const json f = fusion->Report();
+    report["stages"]["fusion"] = f["frame_ms"];
+    report["stages"]["fusion_fill"] = f["fill_ms"];
+  }
   report["keyframes"] = summary.keyframes;
   report["tracking"] = {{"lost_frames", summary.lost}};
   report["loops"] = nullptr;  // loop closure: not built yet
   report["fill"] = fill ? fill->Report() : json();
-  report["surfels"] = nullptr;  // surfel fusion: not built yet
+  report["surfels"] = fusion ? fusion->Report() : json();
   report["warnings"] = summary.warnings;
   return report;
 }
@@ -81,16 +89,17 @@ bool ReconstructionOptions::Check(std::string* message) const {
     if (message) *message = "queue_capacity must be positive";
     return false;
   }
-  return tracker.Check(message) && (!fill || fill_options.Check(message));
+  return tracker.Check(message) && (!fill || fill_options.Check(message)) &&
+         (!fusion || fusion_options.Check(message));
 }
 
 std::string ReconstructionSummary::BriefReport() const {
   char buffer[240];
   std::snprintf(buffer, sizeof(buffer),
                 "%s%d frames in %.1f s (%.1f fps), %d keyframes, %d lost, %ld of %ld keyframe "
-                "hole pixels filled",
+                "hole pixels filled, %ld surfels",
                 complete ? "" : "stopped early: ", frames, seconds, fps, keyframes, lost,
-                filled_pixels, hole_pixels);
+                filled_pixels, hole_pixels, surfels);
   return buffer;
 }
 
@@ -109,23 +118,34 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
         options_.end_frame >= 0 ? std::min(*progress.total, options_.end_frame) : *progress.total;
     progress.total = std::max(0, last - options_.first_frame);
   }
+  const bool live = !progress.total.has_value();  // live input: tracking never waits
+  std::unique_ptr<FusionStage> fusion;
+  if (options_.fusion) {
+    FusionStageOptions fusion_options = options_.fusion_options;
+    fusion_options.drop_when_busy = live;
+    fusion = std::make_unique<FusionStage>(
+        source.camera(), fusion_options,
+        std::vector<FusionStage::Variant>{
+            {options_.fill ? "with_fill" : "without_fill", options_.fill, sink}});
+  }
   std::unique_ptr<FillStage> fill;
   if (options_.fill) {
     FillStageOptions fill_options = options_.fill_options;
-    fill_options.drop_when_busy = !progress.total.has_value();  // live: tracking never waits
-    fill = std::make_unique<FillStage>(source.camera(), fill_options, sink);
+    fill_options.drop_when_busy = live;
+    fill = std::make_unique<FillStage>(source.camera(), fill_options, sink, fusion.get());
   }
   BoundedQueue<FrameItem> queue(options_.queue_capacity);
   ReadStage reader(&source, options_.first_frame, options_.end_frame, &queue);
   TrackStage tracker(source, options_.tracker,
                      options_.camera_file.empty() ? source.Input() : options_.camera_file, &queue,
-                     fill.get());
+                     fill.get(), fusion.get());
   std::string stop_reason;
   // Progress and stop requests, from this thread; true once a stop was asked for.
   auto poll = [&] {
     progress.frames = tracker.frames();
     if (fill)
       progress.keyframes_offered = fill->offered(), progress.keyframes_filled = fill->done();
+    if (fusion) progress.frames_fused = fusion->frames_fused();
     if (callbacks.progress) callbacks.progress(progress);
     if (stop_reason.empty() && callbacks.stop) stop_reason = callbacks.stop();
     return !stop_reason.empty();
@@ -145,6 +165,14 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
     // asked for.
     try {
       fill->Finish(poll);
+    } catch (...) {
+      if (!error) error = std::current_exception();
+    }
+  }
+  if (fusion) {
+    // The fill has offered its last keyframes: the map fuses what is queued and is written.
+    try {
+      fusion->Finish(poll);
     } catch (...) {
       if (!error) error = std::current_exception();
     }
@@ -169,11 +197,12 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
       summary.warnings.push_back("keyframe " + k["timestamp"].get<std::string>() +
                                  " not filled: " + k["reason"].get<std::string>());
   }
+  if (fusion) summary.surfels = fusion->Report()["count"];
   summary.most_lost = summary.frames >= 2 && summary.lost > kMostFramesLost * summary.frames;
   if (summary.most_lost)
     summary.warnings.push_back("tracking was lost on " + std::to_string(summary.lost) + " of " +
                                std::to_string(summary.frames) + " frames");
-  summary.report = MakeReport(options_, source, tracking, fill.get(), summary);
+  summary.report = MakeReport(options_, source, tracking, fill.get(), fusion.get(), summary);
   sink->WriteTrajectory(tracking.trajectory);
   // The camera of the run's images (frames arrive registered to colour; keyframe depth PNGs are
   // millimetres), for colmap-export and other readers of the run folder.

@@ -1,7 +1,7 @@
-// The reconstruction as a library: read, track and fill stages, each in its own thread, joined
-// by bounded queues (stages.h, fill_stage.h), over any FrameSource, writing through a RunSink
-// (run_sink.h), reporting progress through callbacks. Loop closure and surfel fusion join as
-// stages of their own.
+// The reconstruction as a library: read, track, fill and fusion stages, each in its own thread,
+// joined by bounded queues (stages.h, fill_stage.h, fusion_stage.h), over any FrameSource,
+// writing through a RunSink (run_sink.h), reporting progress through callbacks. Loop closure
+// joins as a stage of its own.
 //
 // No run is lost. A keyframe whose fill fails is skipped and counted; the run goes on. When the
 // run must stop (a frame that cannot be read, an implausible depth scale, a keyframe that cannot
@@ -26,6 +26,7 @@
 
 #include "acquisition/frame_source.h"
 #include "pipeline/fill_stage.h"
+#include "pipeline/fusion_stage.h"
 #include "pipeline/run_sink.h"
 #include "registration/tracker.h"
 
@@ -38,6 +39,8 @@ struct ReconstructionOptions {
   TrackerOptions tracker;
   bool fill = true;  // stereo hole filling of keyframes
   FillStageOptions fill_options;
+  bool fusion = true;  // the surfel map (map.ply)
+  FusionStageOptions fusion_options;
   // The file an implausible depth scale is blamed on (the camera.json in use); "" = the input.
   std::string camera_file;
   // Written into the report (config.file, input.path), not read.
@@ -50,7 +53,8 @@ struct ReconstructionProgress {
   std::optional<int> total;    // frames expected, when the source knows
   int keyframes_offered = 0;   // handed to the fill
   int keyframes_filled = 0;    // filled and written
-  bool tracking_done = false;  // the fill is finishing the last keyframes
+  int frames_fused = 0;        // fused into the surfel map
+  bool tracking_done = false;  // the fill and fusion are finishing the last keyframes
 };
 
 struct ReconstructionCallbacks {
@@ -71,6 +75,7 @@ struct ReconstructionSummary {
   int keyframes = 0;
   long hole_pixels = 0;  // in keyframes handed to the fill
   long filled_pixels = 0;
+  long surfels = 0;        // in map.ply
   double seconds = 0;      // the whole run, the fill's tail after tracking included
   double fps = 0;          // frames / seconds
   bool most_lost = false;  // tracking was lost on more than kMostFramesLost of the frames

@@ -7,6 +7,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "surfels/ply.h"
 
 namespace fs = std::filesystem;
 
@@ -24,7 +25,7 @@ cv::Mat ToMillimetres(const cv::Mat& depth_m) {
 }
 
 bool LooksLikeRun(const fs::path& dir) {
-  for (const char* name : {"report.json", "trajectory.txt", "keyframes", "camera.json"})
+  for (const char* name : {"report.json", "trajectory.txt", "keyframes", "camera.json", "map.ply"})
     if (fs::exists(dir / name)) return true;
   return false;
 }
@@ -100,6 +101,16 @@ void FolderRunSink::WriteCamera(const CameraFile& camera) {
 
 void FolderRunSink::WriteReport(const nlohmann::ordered_json& report) {
   WriteTextFileAtomically((fs::path(out_dir_) / "report.json").string(), report.dump(2) + "\n");
+}
+
+void FolderRunSink::WriteMap(const std::vector<Surfel>& surfels) {
+  WriteSurfelPly((fs::path(out_dir_) / "map.ply").string(), surfels);
+}
+
+void InMemoryRunSink::WriteMap(const std::vector<Surfel>& surfels) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  map = surfels;
+  map_written = true;
 }
 
 void InMemoryRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& frame,

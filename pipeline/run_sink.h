@@ -2,7 +2,7 @@
 //
 // A run folder holds trajectory.txt (TUM format, world_from_camera, the input's depth
 // timestamps), camera.json (the camera of the run's images; keyframe depth is millimetres),
-// report.json and keyframes/ (names in DESIGN.md):
+// report.json, map.ply (the surfel map, surfels/ply.h) and keyframes/ (names in DESIGN.md):
 //   <ts>.hole_mask.png     8-bit HoleCode (0 valid, 1 no return, 2 out of range, 3 shadow)
 //   <ts>.depth_filled.png  16-bit millimetres: sensor depth plus filled pixels, 0 still empty
 //   <ts>.fill_overlay.png  colour image, filled pixels green (cyan: carried from earlier
@@ -24,6 +24,7 @@
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/trajectory.h"
 #include "sfm/fill_carry.h"
+#include "surfels/surfel_map.h"
 
 namespace gf {
 
@@ -38,6 +39,8 @@ class RunSink {
   virtual void WriteTrajectory(const Trajectory& trajectory) = 0;
   virtual void WriteCamera(const CameraFile& camera) = 0;
   virtual void WriteReport(const nlohmann::ordered_json& report) = 0;
+  // map.ply (surfels/ply.h): the stable surfels of the run's surfel map.
+  virtual void WriteMap(const std::vector<Surfel>& surfels) = 0;
   // Where the outputs go, for messages ("memory" for the in-memory sink).
   virtual std::string Where() const = 0;
 };
@@ -54,6 +57,7 @@ class FolderRunSink : public RunSink {
   void WriteTrajectory(const Trajectory& trajectory) override;
   void WriteCamera(const CameraFile& camera) override;
   void WriteReport(const nlohmann::ordered_json& report) override;
+  void WriteMap(const std::vector<Surfel>& surfels) override;
   std::string Where() const override { return out_dir_; }
 
  private:
@@ -72,6 +76,7 @@ class InMemoryRunSink : public RunSink {
   void WriteTrajectory(const Trajectory& trajectory) override;
   void WriteCamera(const CameraFile& camera) override;
   void WriteReport(const nlohmann::ordered_json& report) override;
+  void WriteMap(const std::vector<Surfel>& surfels) override;
   std::string Where() const override { return "memory"; }
 
   // Read after the run.
@@ -79,6 +84,8 @@ class InMemoryRunSink : public RunSink {
   Trajectory trajectory;
   CameraFile camera;
   nlohmann::ordered_json report;
+  std::vector<Surfel> map;
+  bool map_written = false;
 
  private:
   std::mutex mutex_;

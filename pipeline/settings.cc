@@ -50,17 +50,28 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(StereoFillOptions, plane_sweep_forward, plane
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing, agreement,
                                    correct_own_fills)
 
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixel_step,
+                                   max_depth_gap_m, max_normal_angle_deg, max_radius_ratio,
+                                   confidence_sigma, stable_confidence, unstable_frames,
+                                   fill_weight, fill_stable_confidence, fill_unstable_frames,
+                                   free_space_margin, free_space_penalty, max_neighbour_step,
+                                   normal_filter_px, normal_filter_depth_m, normal_baseline_px)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionStageOptions, fusion, queue_capacity, count_every,
+                                   fuse_carried)
+
 namespace {
 
 // Every setting, as a config file gives them (keys sorted).
-nlohmann::json SettingsTree(const TrackerOptions& tracker, const FillStageOptions& fill) {
-  return {{"tracker", tracker},
+nlohmann::json SettingsTree(const ReconstructionOptions& o) {
+  const FillStageOptions& fill = o.fill_options;
+  return {{"tracker", o.tracker},
           {"fill",
            {{"queue_capacity", fill.queue_capacity},
             {"geometry", fill.geometry},
             {"pairs", fill.pairs},
             {"stereo", fill.stereo},
-            {"carry", fill.carry}}}};
+            {"carry", fill.carry}}},
+          {"fusion", o.fusion_options}};
 }
 
 // Checks `given` (the file's tree) against `known` (every setting, current values): same keys,
@@ -92,32 +103,32 @@ void CheckAgainst(const nlohmann::json& given, const nlohmann::json& known,
 
 }  // namespace
 
-nlohmann::ordered_json SettingsToJson(const TrackerOptions& tracker, const FillStageOptions& fill) {
+nlohmann::ordered_json SettingsToJson(const ReconstructionOptions& options) {
   // Through nlohmann::json (keys sorted) into an ordered_json for report.json.
-  return nlohmann::ordered_json::parse(SettingsTree(tracker, fill).dump());
+  return nlohmann::ordered_json::parse(SettingsTree(options).dump());
 }
 
-void ApplyConfig(const std::string& text, const std::string& path, TrackerOptions* tracker,
-                 FillStageOptions* fill_options) {
+void ApplyConfig(const std::string& text, const std::string& path, ReconstructionOptions* options) {
   nlohmann::json given;
   try {
     given = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     throw InputError(path, std::string("not valid JSON: ") + e.what());
   }
-  nlohmann::json merged = SettingsTree(*tracker, *fill_options);
+  nlohmann::json merged = SettingsTree(*options);
   CheckAgainst(given, merged, "", path);
   merged.merge_patch(given);
-  TrackerOptions t = *tracker;
-  FillStageOptions f = *fill_options;
+  ReconstructionOptions o = *options;
+  FillStageOptions& f = o.fill_options;
   try {
-    merged.at("tracker").get_to(t);
+    merged.at("tracker").get_to(o.tracker);
     const nlohmann::json& fill = merged.at("fill");
     fill.at("queue_capacity").get_to(f.queue_capacity);
     fill.at("geometry").get_to(f.geometry);
     fill.at("pairs").get_to(f.pairs);
     fill.at("stereo").get_to(f.stereo);
     fill.at("carry").get_to(f.carry);
+    merged.at("fusion").get_to(o.fusion_options);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path, std::string("bad setting: ") + e.what());
   }
@@ -126,19 +137,18 @@ void ApplyConfig(const std::string& text, const std::string& path, TrackerOption
   auto refuse = [&](const char* name) {
     throw InputError(path, std::string("settings refused (") + name + "): " + problem);
   };
-  if (!t.Check(&problem)) refuse("tracker");
+  if (!o.tracker.Check(&problem)) refuse("tracker");
   if (!f.geometry.Check(&problem)) refuse("fill.geometry");
   if (!f.pairs.Check(&problem)) refuse("fill.pairs");
   if (!f.stereo.Check(&problem)) refuse("fill.stereo");
   if (!f.carry.Check(&problem)) refuse("fill.carry");
   if (!f.Check(&problem)) refuse("fill");
-  *tracker = t;
-  *fill_options = f;
+  if (!o.fusion_options.Check(&problem)) refuse("fusion");
+  *options = o;
 }
 
-void ApplyConfigFile(const std::string& path, TrackerOptions* tracker,
-                     FillStageOptions* fill_options) {
-  ApplyConfig(ReadTextFile(path), path, tracker, fill_options);
+void ApplyConfigFile(const std::string& path, ReconstructionOptions* options) {
+  ApplyConfig(ReadTextFile(path), path, options);
 }
 
 }  // namespace gf

@@ -8,33 +8,32 @@
 //    "fill": {"queue_capacity": 16, "geometry": {...}, "pairs": {...},
 //             "stereo": {"sgbm": {...}, "plane_sweep": {...}, "depth_steps": {...},
 //                        "see_through": {...}, "validation": {...}, "photometric": {...}, ...},
-//             "carry": {...}}}
+//             "carry": {...}},
+//    "fusion": {"fusion": {...}, "queue_capacity": 32, ...}}
 // Keys are the Options structs' field names. Settings the file leaves out keep their values.
 //
 // Usage:
 //   gf::ReconstructionOptions options;  // throws InputError on any problem in the file:
-//   gf::ApplyConfigFile("config.json", &options.tracker, &options.fill_options);
+//   gf::ApplyConfigFile("config.json", &options);
 #pragma once
 
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "pipeline/fill_stage.h"
-#include "registration/tracker.h"
+#include "pipeline/reconstruction.h"
 
 namespace gf {
 
 // Every setting a config file may set, with its current value.
-nlohmann::ordered_json SettingsToJson(const TrackerOptions& tracker, const FillStageOptions& fill);
+nlohmann::ordered_json SettingsToJson(const ReconstructionOptions& options);
 
 // Overrides the options with the settings in the JSON text `text`. Throws InputError naming `path`
 // and the problem: not JSON, not an object, an unknown setting, a value of the wrong type (a
 // fraction for an integer, a number for true/false), or values that the options' Check() refuses.
 // On a throw the options are unchanged.
-void ApplyConfig(const std::string& text, const std::string& path, TrackerOptions* tracker,
-                 FillStageOptions* fill);
+void ApplyConfig(const std::string& text, const std::string& path, ReconstructionOptions* options);
 
 // ApplyConfig on the file at `path`; a missing or unreadable file is an InputError too.
-void ApplyConfigFile(const std::string& path, TrackerOptions* tracker, FillStageOptions* fill);
+void ApplyConfigFile(const std::string& path, ReconstructionOptions* options);
 
 }  // namespace gf

@@ -11,7 +11,7 @@ namespace {
 // The problem InputError reports for `text`, or "" when ApplyConfig accepts it.
 std::string Problem(const std::string& text, ReconstructionOptions* options) {
   try {
-    ApplyConfig(text, "run.json", &options->tracker, &options->fill_options);
+    ApplyConfig(text, "run.json", options);
   } catch (const InputError& e) {
     EXPECT_EQ(e.file(), "run.json");
     return e.problem();
@@ -22,7 +22,7 @@ std::string Problem(const std::string& text, ReconstructionOptions* options) {
 TEST(Config, SettingsListEveryStageWithItsValues) {
   ReconstructionOptions options;
   options.fill_options.stereo.plane_sweep.max_planes = 64;
-  const auto j = SettingsToJson(options.tracker, options.fill_options);
+  const auto j = SettingsToJson(options);
   EXPECT_EQ(j["tracker"]["pyramid_levels"], 3);
   EXPECT_EQ(j["tracker"]["icp"]["iterations"].get<std::vector<int>>(),
             (std::vector<int>{10, 6, 2}));
@@ -61,14 +61,13 @@ TEST(Config, ARunsSettingsReadBackGiveTheSameSettings) {
   changed.fill_options.pairs.lookahead = 4;
   changed.fill_options.stereo.validation.max_ring_error = 0.025;
   ReconstructionOptions read;
-  EXPECT_EQ(Problem(SettingsToJson(changed.tracker, changed.fill_options).dump(), &read), "");
-  EXPECT_EQ(SettingsToJson(read.tracker, read.fill_options),
-            SettingsToJson(changed.tracker, changed.fill_options));
+  EXPECT_EQ(Problem(SettingsToJson(changed).dump(), &read), "");
+  EXPECT_EQ(SettingsToJson(read), SettingsToJson(changed));
 }
 
 TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
   ReconstructionOptions options;
-  const auto before = SettingsToJson(options.tracker, options.fill_options);
+  const auto before = SettingsToJson(options);
   EXPECT_EQ(Problem(R"({"fill": {"stereo": {"blok_size": 5}}})", &options),
             "unknown setting 'fill.stereo.blok_size'");
   EXPECT_EQ(Problem(R"({"fill": {"stereo": {"sgbm": {"block_size": 5.5}}}})", &options),
@@ -100,7 +99,7 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
   // The old place of a setting is refused: the pair geometry is one setting, fill.geometry.
   EXPECT_EQ(Problem(R"({"fill": {"pairs": {"epipole_margin_px": 60}}})", &options),
             "unknown setting 'fill.pairs.epipole_margin_px'");
-  EXPECT_EQ(SettingsToJson(options.tracker, options.fill_options), before);
+  EXPECT_EQ(SettingsToJson(options), before);
   EXPECT_EQ(Problem(R"({"fill": {"geometry": {"epipole_margin_px": 60}}})", &options), "");
   EXPECT_EQ(options.fill_options.Filler().pairs.geometry.epipole_margin_px, 60);
   EXPECT_EQ(options.fill_options.Filler().stereo.geometry.epipole_margin_px, 60);
@@ -108,8 +107,7 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
 
 TEST(Config, MissingFileIsAnInputError) {
   ReconstructionOptions options;
-  EXPECT_THROW(ApplyConfigFile("/nonexistent/config.json", &options.tracker, &options.fill_options),
-               InputError);
+  EXPECT_THROW(ApplyConfigFile("/nonexistent/config.json", &options), InputError);
 }
 
 }  // namespace

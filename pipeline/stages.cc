@@ -61,8 +61,13 @@ void ReadStage::Run() {
 
 TrackStage::TrackStage(const FrameSource& source, const TrackerOptions& options,
                        const std::string& camera_file, BoundedQueue<FrameItem>* queue,
-                       FillStage* fill)
-    : source_(source), options_(options), camera_file_(camera_file), queue_(queue), fill_(fill) {
+                       FillStage* fill, FusionStage* fusion)
+    : source_(source),
+      options_(options),
+      camera_file_(camera_file),
+      queue_(queue),
+      fill_(fill),
+      fusion_(fusion) {
   thread_.Start([this] { Run(); });
 }
 
@@ -101,6 +106,9 @@ void TrackStage::Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker) 
                        "the stereo fill needs colour images (or --no-fill)");
     fill_->Offer(frame, r.world_from_camera);
   }
+  // Lost frames have no pose to fuse with.
+  if (fusion_ && r.status != TrackingStatus::kLost)
+    fusion_->OfferFrame(frame, r.world_from_camera, tracker->keyframes() - 1);
   record_.trajectory.push_back({frame.timestamp, frame.timestamp_text, r.world_from_camera});
   ++record_.frames;
 }

@@ -21,6 +21,7 @@
 #include "acquisition/trajectory.h"
 #include "pipeline/bounded_queue.h"
 #include "pipeline/fill_stage.h"
+#include "pipeline/fusion_stage.h"
 #include "pipeline/stage_thread.h"
 #include "registration/tracker.h"
 
@@ -59,10 +60,11 @@ struct TrackingRecord {
 
 class TrackStage {
  public:
-  // `queue` and `fill` (may be null: no fill) must outlive the stage. camera_file is the file an
-  // implausible depth scale is blamed on (the camera.json in use).
+  // `queue`, `fill` and `fusion` (either may be null: no fill, no map) must outlive the stage.
+  // camera_file is the file an implausible depth scale is blamed on (the camera.json in use).
   TrackStage(const FrameSource& source, const TrackerOptions& options,
-             const std::string& camera_file, BoundedQueue<FrameItem>* queue, FillStage* fill);
+             const std::string& camera_file, BoundedQueue<FrameItem>* queue, FillStage* fill,
+             FusionStage* fusion);
   ~TrackStage();
   void Stop();
   // True once tracking has ended (waits at most `timeout`).
@@ -85,6 +87,7 @@ class TrackStage {
   std::string camera_file_;
   BoundedQueue<FrameItem>* queue_;
   FillStage* fill_;
+  FusionStage* fusion_;
   std::atomic<bool> stop_{false};
   std::atomic<int> frames_{0};
   TrackingRecord record_;

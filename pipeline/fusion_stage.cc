@@ -1,0 +1,180 @@
+#include "pipeline/fusion_stage.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+
+#include "acquisition/errors.h"
+#include "acquisition/stats.h"
+
+namespace gf {
+namespace {
+
+using json = nlohmann::ordered_json;
+
+const char* SourceName(size_t source) {
+  switch (static_cast<DepthSource>(source)) {
+    case DepthSource::kSensor:
+      return "sensor";
+    case DepthSource::kStereo:
+      return "stereo_fill";
+    case DepthSource::kColmap:
+      return "colmap";
+    case DepthSource::kCarried:
+      return "carried_fill";
+    default:
+      return "none";
+  }
+}
+
+json Timing(std::vector<double> ms) {
+  if (ms.empty()) return {{"median_ms", nullptr}, {"max_ms", nullptr}, {"count", 0}};
+  std::sort(ms.begin(), ms.end());
+  return {{"median_ms", ms[ms.size() / 2]}, {"max_ms", ms.back()}, {"count", ms.size()}};
+}
+
+}  // namespace
+
+bool FusionStageOptions::Check(std::string* message) const {
+  if (queue_capacity < 1 || count_every < 1) {
+    if (message) *message = "fusion stage: queue_capacity and count_every must be positive";
+    return false;
+  }
+  return fusion.Check(message);
+}
+
+json SurfelReport(const SurfelFusion& fusion, const std::vector<json>& over_time) {
+  const SurfelCounts c = fusion.Counts();
+  json by_source = json::object(), area = json::object(), unstable = json::object();
+  for (size_t k = 1; k < c.stable.size(); ++k) {
+    by_source[SourceName(k)] = c.stable[k];
+    area[SourceName(k)] = c.stable_area_m2[k];
+    unstable[SourceName(k)] = c.unstable[k];
+  }
+  return {{"count", c.total_stable()},
+          {"by_source", by_source},
+          {"area_m2", area},
+          {"unstable", unstable},
+          {"bytes_per_surfel", sizeof(Surfel)},
+          {"memory_bytes", fusion.MemoryBytes()},
+          {"count_over_time", over_time}};
+}
+
+FusionStage::FusionStage(const Camera& camera, const FusionStageOptions& options,
+                         std::vector<Variant> variants)
+    : camera_(camera), options_(options), queue_(options.queue_capacity) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+  for (Variant& v : variants) {
+    GF_CHECK(v.sink != nullptr, "every fusion variant needs a sink");
+    maps_.push_back({std::move(v), SurfelFusion(camera, options.fusion), {}, {}, {}, 0});
+  }
+  worker_.Start([this] { Run(); });
+}
+
+FusionStage::~FusionStage() {
+  Cancel();
+  worker_.Join();
+}
+
+void FusionStage::OfferFrame(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe) {
+  Item item;
+  item.frame = frame;
+  item.world_from_camera = world_from_camera;
+  item.keyframe = keyframe;
+  Offer(std::move(item));
+}
+
+void FusionStage::OfferFill(const FilledKeyframe& filled, int keyframe) {
+  if (!filled.record.failure.empty() || filled.fill.fill_mask.empty()) return;
+  Item item;
+  item.fill = true;
+  item.frame = filled.key->frame;
+  item.world_from_camera = filled.key->world_from_camera;
+  item.keyframe = keyframe;
+  item.filled_depth = filled.fill.filled_depth;
+  item.confidence = filled.fill.confidence;
+  // The keyframe's own stereo fill; carried pixels repeat earlier keyframes' own fills.
+  item.fill_mask = filled.fill.fill_mask.clone();
+  if (!options_.fuse_carried)
+    item.fill_mask &= filled.fill.source == static_cast<uint8_t>(DepthSource::kStereo);
+  Offer(std::move(item));
+}
+
+void FusionStage::Offer(Item item) {
+  const bool queued =
+      options_.drop_when_busy ? queue_.TryPush(std::move(item)) : queue_.Push(std::move(item));
+  if (!queued) ++dropped_;
+}
+
+void FusionStage::Finish(const std::function<bool()>& poll) {
+  queue_.Close();
+  while (!worker_.WaitFor(std::chrono::milliseconds(50)))
+    if (poll && poll()) Cancel();
+  worker_.Join();
+  if (worker_.error()) std::rethrow_exception(worker_.error());
+  for (Map& m : maps_) {
+    Record(&m);
+    m.variant.sink->WriteMap(m.fusion.StableSurfels());
+  }
+}
+
+void FusionStage::Cancel() {
+  cancelled_ = true;
+  queue_.Close();
+}
+
+void FusionStage::Run() {
+  Item item;
+  while (!cancelled_ && queue_.Pop(&item)) {
+    for (Map& m : maps_) Fuse(item, &m);
+    if (!item.fill) ++frames_fused_;
+  }
+}
+
+void FusionStage::Fuse(const Item& item, Map* m) {
+  if (item.fill && !m->variant.fills) return;
+  try {
+    FusionStats s;
+    if (item.fill) {
+      s = m->fusion.FuseFill(item.frame, item.filled_depth, item.fill_mask, item.confidence,
+                             DepthSource::kStereo, item.world_from_camera, item.keyframe);
+      m->fill_ms.push_back(s.ms);
+    } else {
+      s = m->fusion.FuseFrame(item.frame, item.world_from_camera, item.keyframe);
+      m->frame_ms.push_back(s.ms);
+      if (m->fusion.frames() % options_.count_every == 0) Record(m);
+    }
+    spdlog::debug("{} {} {}: {}", m->variant.name, item.fill ? "fill" : "frame",
+                  KeyframeName(item.frame), s.BriefReport());
+  } catch (const std::exception& e) {
+    ++m->failed;
+    spdlog::warn("fusion ({}): {} {} skipped: {}", m->variant.name,
+                 item.fill ? "fill of keyframe" : "frame", KeyframeName(item.frame), e.what());
+  }
+}
+
+void FusionStage::Record(Map* m) const {
+  const SurfelCounts c = m->fusion.Counts();
+  m->over_time.push_back({{"frame", m->fusion.frames()},
+                          {"stable", c.total_stable()},
+                          {"sensor", c.stable[static_cast<int>(DepthSource::kSensor)]},
+                          {"stereo_fill", c.stable[static_cast<int>(DepthSource::kStereo)]},
+                          {"unstable", c.unstable[0] + c.unstable[1] + c.unstable[2] +
+                                           c.unstable[3] + c.unstable[4]}});
+}
+
+json FusionStage::Report(size_t index) const {
+  const Map& m = maps_.at(index);
+  json r = SurfelReport(m.fusion, m.over_time);
+  r["variant"] = m.variant.name;
+  r["fills_fused"] = m.fill_ms.size();
+  r["frame_ms"] = Timing(m.frame_ms);
+  r["fill_ms"] = Timing(m.fill_ms);
+  r["failed_items"] = m.failed;
+  r["dropped_items"] = dropped_.load();
+  return r;
+}
+
+}  // namespace gf

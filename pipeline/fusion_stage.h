@@ -1,0 +1,105 @@
+// The fusion stage of the reconstruction: every tracked frame's depth and every keyframe's stereo
+// fill fused into surfel maps (surfels/fusion.h) in its own thread.
+//
+// The track stage offers each tracked frame (with its pose and keyframe); the fill stage offers
+// each keyframe's own stereo fill as it is written (the carried fills are the fills of earlier
+// keyframes, which the map already fuses from those keyframes). Items queue in the order they
+// arrive; for recorded input the producers wait for room, for live input a full queue drops the
+// item (counted). The stage keeps one map per variant: a run keeps one ("with fill", or the
+// sensor alone with --no-fill); `compare` keeps two, the same frames fused with and without the
+// fills. Finish() drains the queue, joins the thread and writes each variant's map.ply through its
+// sink; Report() gives report.json's "surfels" object for a variant.
+//
+// Failures are contained per item: a frame or fill whose fusion throws is skipped, counted and
+// logged; the run goes on.
+//
+// Thread-safety: Offer*() from the track and fill threads; Cancel() from any thread; Finish() and
+// Report() from the owner's.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "acquisition/camera.h"
+#include "acquisition/rgbd_frame.h"
+#include "acquisition/se3.h"
+#include "pipeline/bounded_queue.h"
+#include "pipeline/run_sink.h"
+#include "pipeline/stage_thread.h"
+#include "sfm/keyframe_filler.h"
+#include "surfels/fusion.h"
+
+namespace gf {
+
+struct FusionStageOptions {
+  FusionOptions fusion;
+  int queue_capacity = 32;     // items (frames and fills) waiting for the worker
+  int count_every = 10;        // surfel counts are recorded every this many frames
+  bool fuse_carried = false;   // fuse the carried fills too (they repeat earlier keyframes')
+  bool drop_when_busy = true;  // live input; recorded input waits (set by the pipeline)
+  bool Check(std::string* message = nullptr) const;
+};
+
+class FusionStage {
+ public:
+  struct Variant {
+    std::string name;   // "with_fill", "without_fill"
+    bool fills = true;  // fuse the keyframes' fills
+    RunSink* sink;      // where its map.ply goes (must outlive the stage)
+  };
+  FusionStage(const Camera& camera, const FusionStageOptions& options,
+              std::vector<Variant> variants);
+  ~FusionStage();  // cancels and joins if Finish() was not called
+  FusionStage(const FusionStage&) = delete;
+  FusionStage& operator=(const FusionStage&) = delete;
+
+  void OfferFrame(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe);
+  void OfferFill(const FilledKeyframe& filled, int keyframe);
+  // Fuses what is queued, joins the worker, writes the maps. Rethrows a map that could not be
+  // written. `poll` (may be empty) is called every 50 ms while it waits; true cancels the rest.
+  void Finish(const std::function<bool()>& poll = {});
+  void Cancel();
+  int frames_fused() const { return frames_fused_; }
+  // report.json's "surfels" for variant `index`.
+  nlohmann::ordered_json Report(size_t index = 0) const;
+
+ private:
+  struct Item {
+    bool fill = false;
+    RgbdFrame frame;
+    SE3 world_from_camera;
+    int keyframe = 0;
+    cv::Mat filled_depth, fill_mask, confidence;  // fills only
+  };
+  struct Map {
+    Variant variant;
+    SurfelFusion fusion;
+    std::vector<nlohmann::ordered_json> over_time;  // counts every count_every frames
+    std::vector<double> frame_ms, fill_ms;
+    int failed = 0;
+  };
+  void Offer(Item item);
+  void Run();
+  void Fuse(const Item& item, Map* map);
+  void Record(Map* map) const;
+
+  Camera camera_;
+  FusionStageOptions options_;
+  std::vector<Map> maps_;
+  BoundedQueue<Item> queue_;
+  std::atomic<int> frames_fused_{0};
+  std::atomic<int> dropped_{0};
+  std::atomic<bool> cancelled_{false};
+  StageThread worker_;
+};
+
+// report.json's "surfels" object of a fusion: stable count (the surfels map.ply holds), the
+// counts by source, their area, and how they grew.
+nlohmann::ordered_json SurfelReport(const SurfelFusion& fusion,
+                                    const std::vector<nlohmann::ordered_json>& over_time);
+
+}  // namespace gf
