@@ -20,6 +20,7 @@
 #include "acquisition/file_util.h"
 #include "acquisition/stats.h"
 #include "acquisition/trajectory_metrics.h"
+#include "apps/bench_fusion.h"
 #include "apps/progress.h"
 #include "pipeline/settings.h"
 #include "registration/tracker.h"
@@ -206,6 +207,10 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   nlohmann::ordered_json stereo_fill;
   if (options.fill_every > 0)
     stereo_fill = BenchStereoFill(frames, results.front().trajectory, camera, options);
+  nlohmann::ordered_json fusion;
+  if (options.fusion)
+    fusion = BenchFusion(frames, results.front().trajectory, camera,
+                         options.pipeline.fusion_options.fusion);
 
   if (options.peers) {
     cv::Mat k;
@@ -258,6 +263,7 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   for (const MethodResult& m : results)
     out["methods"].push_back(Summarise(m, gt.empty() ? nullptr : &gt));
   if (!stereo_fill.is_null()) out["stereo_fill"] = stereo_fill;
+  if (!fusion.is_null()) out["fusion"] = fusion;
   out["settings"] = SettingsToJson(options.pipeline);
   return out;
 }

@@ -32,6 +32,9 @@ struct BenchOptions {
   // paired and filled as reconstruct does (KeyframePairScheduler, then FillHolesByStereo) with our
   // tracked poses; next to OpenCV's StereoSGBM alone on the same rectified sideways pairs.
   int fill_every = 0;
+  // Also time the surfel fusion per frame, on one core and on two, with our tracked poses, and
+  // with a map of about a million surfels (apps/bench_fusion.h).
+  bool fusion = false;
   FrameSourceOptions source;
   // Ours, as reconstruct runs them (--config FILE may change them): the tracker, the fill (pairs,
   // stereo, also the OpenCV SGBM peer's settings, carry) and the fusion.

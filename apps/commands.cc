@@ -143,6 +143,9 @@ void RegisterCommands(CLI::App& app) {
         "--fill-every", options->fill_every,
         "also time stereo hole filling on one core, every K-th frame a keyframe, paired "
         "and filled as reconstruct does with the tracked poses (0: off)");
+    cmd->add_flag("--fusion", options->fusion,
+                  "also time the surfel fusion per frame on one core and on two, and with a map "
+                  "of about a million surfels");
     auto config = std::make_shared<std::string>();
     cmd->add_option("--config", *config,
                     "JSON file of tracker and fill settings, as for reconstruct");

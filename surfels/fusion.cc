@@ -85,10 +85,59 @@ long SurfelCounts::total_stable() const {
 }
 
 SurfelFusion::SurfelFusion(const Camera& camera, const FusionOptions& options)
-    : camera_(camera), options_(options), rays_(camera) {
+    : camera_(camera), options_(options) {
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
+  const UndistortedPixels undistorted(camera);
+  rays_.create(camera.height, camera.width, CV_32FC2);
+  for (int y = 0; y < camera.height; ++y)
+    for (int x = 0; x < camera.width; ++x) {
+      const Eigen::Vector2d r = undistorted.Ray(x, y);
+      rays_.at<cv::Vec2f>(y, x) = {static_cast<float>(r.x()), static_cast<float>(r.y())};
+    }
   index_map_.assign(static_cast<size_t>(camera.width) * camera.height, kEmpty);
+  // The image's extent in normalised coordinates (over its border rays), for culling.
+  view_x_[0] = view_y_[0] = std::numeric_limits<float>::max();
+  view_x_[1] = view_y_[1] = -std::numeric_limits<float>::max();
+  for (int y = 0; y < camera.height; ++y)
+    for (int x = 0; x < camera.width; ++x) {
+      if (y > 0 && y + 1 < camera.height && x > 0 && x + 1 < camera.width) continue;
+      const cv::Vec2f r = rays_.at<cv::Vec2f>(y, x);
+      view_x_[0] = std::min(view_x_[0], r[0]), view_x_[1] = std::max(view_x_[1], r[0]);
+      view_y_[0] = std::min(view_y_[0], r[1]), view_y_[1] = std::max(view_y_[1], r[1]);
+    }
+}
+
+bool SurfelFusion::ChunkVisible(size_t c, const SE3& camera_from_world) {
+  Chunk& chunk = chunks_[c];
+  if (chunk.dirty) {
+    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+    Eigen::Vector3f hi = -lo;
+    float largest = 0;
+    const size_t end = std::min(map_.size(), (c + 1) * kChunk);
+    for (size_t i = c * kChunk; i < end; ++i) {
+      const Surfel& s = map_[i];
+      if (s.removed()) continue;
+      lo = lo.cwiseMin(s.position);
+      hi = hi.cwiseMax(s.position);
+      largest = std::max(largest, s.radius);
+    }
+    chunk.centre = 0.5f * (lo + hi);
+    chunk.radius = lo.x() > hi.x() ? -1.f : 0.5f * (hi - lo).norm() + largest;
+    chunk.dirty = false;
+  }
+  if (chunk.radius < 0) return false;  // all removed
+  const Eigen::Vector3f q = (camera_from_world * chunk.centre.cast<double>()).cast<float>();
+  const float r = chunk.radius;
+  if (q.z() + r < options_.min_depth_m * 0.5) return false;
+  // Outside one of the four planes through the camera centre and the image's edges.
+  // Signed distance of the centre beyond the plane a = slope * z (a: x or y, or their negatives).
+  auto beyond = [&](float a, float slope) {
+    return (a - slope * q.z()) / std::sqrt(1.f + slope * slope) > r;
+  };
+  if (beyond(q.x(), view_x_[1]) || beyond(-q.x(), -view_x_[0])) return false;
+  if (beyond(q.y(), view_y_[1]) || beyond(-q.y(), -view_y_[0])) return false;
+  return true;
 }
 
 FusionStats SurfelFusion::FuseFrame(const RgbdFrame& frame, const SE3& world_from_camera,
@@ -118,32 +167,65 @@ FusionStats SurfelFusion::FuseFill(const RgbdFrame& frame, const cv::Mat& filled
 
 void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   std::fill(index_map_.begin(), index_map_.end(), kEmpty);
-  in_camera_.resize(map_.size());
-  pixel_of_.assign(map_.size(), -1);
+  chunks_.resize((map_.size() + kChunk - 1) / kChunk);
+  const int chunks = static_cast<int>(chunks_.size());
+  // The chunks in view, and where each one's entries start (entries: the surfels of the chunks
+  // in view, in map order; the per-surfel work of this step runs over them only).
+  std::vector<uint8_t> in_view(chunks);
+  cv::parallel_for_(cv::Range(0, chunks), [&](const cv::Range& range) {
+    for (int c = range.start; c < range.end; ++c) in_view[c] = ChunkVisible(c, camera_from_world);
+  });
+  std::vector<size_t> offset(chunks);
+  size_t entries = 0;
+  for (int c = 0; c < chunks; ++c) {
+    offset[c] = entries;
+    if (in_view[c]) entries += std::min(map_.size(), (c + 1) * kChunk) - c * kChunk;
+  }
+  visible_.resize(entries);
+  in_camera_.resize(entries);
+  normal_in_camera_.resize(entries);
+  pixel_of_.assign(entries, -1);
   const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
-  // Depth and index packed into one 64-bit word, so that the nearest surfel per pixel is an atomic
+  // Depth and entry packed into one 64-bit word, so that the nearest surfel per pixel is an atomic
   // minimum (projection runs in parallel).
   auto* cells = reinterpret_cast<std::atomic<uint64_t>*>(index_map_.data());
   static_assert(sizeof(std::atomic<uint64_t>) == sizeof(uint64_t), "atomic words");
   const int width = camera_.width, height = camera_.height;
-  cv::parallel_for_(cv::Range(0, static_cast<int>(map_.size())), [&](const cv::Range& range) {
-    for (int i = range.start; i < range.end; ++i) {
-      const Surfel& s = map_[i];
-      if (s.removed()) continue;
-      const Eigen::Vector3f q = r * s.position + t;
-      in_camera_[i] = q;
-      if (q.z() < options_.min_depth_m * 0.5) continue;
-      const Eigen::Vector2d uv = camera_.ProjectDistorted(q.cast<double>());
-      const int x = static_cast<int>(std::lround(uv.x())),
-                y = static_cast<int>(std::lround(uv.y()));
-      if (x < 0 || y < 0 || x >= width || y >= height) continue;
-      const int pixel = y * width + x;
-      pixel_of_[i] = pixel;
-      const uint64_t packed = Pack(q.z(), static_cast<uint32_t>(i));
-      uint64_t old = cells[pixel].load(std::memory_order_relaxed);
-      while (packed < old &&
-             !cells[pixel].compare_exchange_weak(old, packed, std::memory_order_relaxed)) {
+  // Camera::ProjectDistorted in float, inlined: this runs for every surfel in view.
+  const float fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
+  const float k1 = camera_.distortion[0], k2 = camera_.distortion[1], p1 = camera_.distortion[2],
+              p2 = camera_.distortion[3], k3 = camera_.distortion[4];
+  const float near = static_cast<float>(options_.min_depth_m * 0.5);
+  cv::parallel_for_(cv::Range(0, chunks), [&](const cv::Range& range) {
+    for (int c = range.start; c < range.end; ++c) {
+      if (!in_view[c]) continue;
+      const size_t first = c * kChunk, end = std::min(map_.size(), first + kChunk);
+      for (size_t i = first; i < end; ++i) {
+        const size_t e = offset[c] + (i - first);
+        visible_[e] = static_cast<uint32_t>(i);
+        const Surfel& s = map_[i];
+        if (s.removed()) continue;
+        const Eigen::Vector3f q = r * s.position + t;
+        in_camera_[e] = q;
+        normal_in_camera_[e] = r * s.normal;
+        if (q.z() < near) continue;
+        const float a = q.x() / q.z(), b = q.y() / q.z(), r2 = a * a + b * b;
+        const float radial = 1.f + r2 * (k1 + r2 * (k2 + r2 * k3));
+        const float u = fx * (a * radial + 2.f * p1 * a * b + p2 * (r2 + 2.f * a * a)) + cx;
+        const float v = fy * (b * radial + p1 * (r2 + 2.f * b * b) + 2.f * p2 * a * b) + cy;
+        // Nearest pixel (truncating u + 0.5 rounds it for u >= -0.5; std::lround and std::floor
+        // are library calls on baseline x86-64, and this loop runs per surfel in view).
+        if (!(u >= -0.5f && v >= -0.5f)) continue;
+        const int x = static_cast<int>(u + 0.5f), y = static_cast<int>(v + 0.5f);
+        if (x < 0 || y < 0 || x >= width || y >= height) continue;
+        const int pixel = y * width + x;
+        pixel_of_[e] = pixel;
+        const uint64_t packed = Pack(q.z(), static_cast<uint32_t>(e));
+        uint64_t old = cells[pixel].load(std::memory_order_relaxed);
+        while (packed < old &&
+               !cells[pixel].compare_exchange_weak(old, packed, std::memory_order_relaxed)) {
+        }
       }
     }
   });
@@ -154,7 +236,6 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
   FusionStats stats;
   const SE3 camera_from_world = m.world_from_camera.Inverse();
   ProjectMap(camera_from_world);
-  const Eigen::Matrix3f r_cw = camera_from_world.RotationMatrix().cast<float>();
   const int width = camera_.width, height = camera_.height, step = options_.pixel_step;
   const int grid_cols = (width - m.grid_offset + step - 1) / step;
   const int grid_rows = (height - m.grid_offset + step - 1) / step;
@@ -180,13 +261,13 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
   auto smooth_vertex = [&](int x, int y) -> Eigen::Vector3f {
     const float z = smooth_half.at<float>(std::min(y / 2, smooth_half.rows - 1),
                                           std::min(x / 2, smooth_half.cols - 1));
-    const Eigen::Vector2d n = rays_.Ray(x, y);
-    return Eigen::Vector3f(static_cast<float>(n.x()) * z, static_cast<float>(n.y()) * z, z);
+    const cv::Vec2f& n = rays_.at<cv::Vec2f>(y, x);
+    return Eigen::Vector3f(n[0] * z, n[1] * z, z);
   };
   auto vertex = [&](const cv::Mat& depth, int x, int y) -> Eigen::Vector3f {
     const float z = depth.at<float>(y, x);
-    const Eigen::Vector2d n = rays_.Ray(x, y);
-    return Eigen::Vector3f(static_cast<float>(n.x()) * z, static_cast<float>(n.y()) * z, z);
+    const cv::Vec2f& n = rays_.at<cv::Vec2f>(y, x);
+    return Eigen::Vector3f(n[0] * z, n[1] * z, z);
   };
   cv::parallel_for_(cv::Range(0, grid_rows), [&](const cv::Range& range) {
     for (int gy = range.start; gy < range.end; ++gy) {
@@ -217,10 +298,11 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
         res.normal = n;
         const float head_on = std::sqrt(2.f) * z / focal;
         res.radius = std::min(2.f * head_on, head_on / std::max(std::abs(n.z()), 1e-3f));
-        const float rr = std::hypot(x - float(camera_.cx), y - float(camera_.cy)) / half_diagonal;
+        const float ux = x - float(camera_.cx), uy = y - float(camera_.cy);
+        const float rr2 = (ux * ux + uy * uy) / (half_diagonal * half_diagonal);
         const float pixel_weight = m.weight.empty() ? 1.f : m.weight.at<float>(y, x);
         res.weight =
-            std::exp(-rr * rr / two_sigma2) * pixel_weight * static_cast<float>(m.weight_scale);
+            std::exp(-rr2 / two_sigma2) * pixel_weight * static_cast<float>(m.weight_scale);
         if (!(res.weight > 0)) continue;
         if (has_color) {
           const cv::Vec3b c = m.color.at<cv::Vec3b>(y, x);
@@ -237,14 +319,14 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
           for (int dx = -1; dx <= 1; ++dx) {
             const uint64_t packed = index_map_[static_cast<size_t>(y + dy) * width + x + dx];
             if (packed == kEmpty) continue;
-            const uint32_t id = static_cast<uint32_t>(packed & 0xffffffffu);
-            const Eigen::Vector3f& q = in_camera_[id];
+            const uint32_t e = static_cast<uint32_t>(packed & 0xffffffffu);
+            const Eigen::Vector3f& q = in_camera_[e];
             if (std::abs(q.z() - z) * lambda >= gap) continue;
-            if ((r_cw * map_[id].normal).dot(n) < cos_max) continue;
-            const float dist = ray.cross(q).norm() / lambda;
+            if (normal_in_camera_[e].dot(n) < cos_max) continue;
+            const float dist = ray.cross(q).squaredNorm();  // |ray x q|^2 orders as the distance
             if (dist < best) {
               best = dist;
-              res.match = static_cast<int>(id);
+              res.match = static_cast<int>(visible_[e]);
             }
           }
       }
@@ -264,13 +346,15 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
         s.position = (c * s.position + a * p) / sum;
         s.normal = ((c * s.normal + a * n) / sum).normalized();
         s.radius = (c * s.radius + a * res.radius) / sum;
-        s.red = static_cast<uint8_t>(std::lround((c * s.red + a * res.red) / sum));
-        s.green = static_cast<uint8_t>(std::lround((c * s.green + a * res.green) / sum));
-        s.blue = static_cast<uint8_t>(std::lround((c * s.blue + a * res.blue) / sum));
+        // Colour channels are in [0, 255], so adding 0.5 rounds them.
+        s.red = static_cast<uint8_t>((c * s.red + a * res.red) / sum + 0.5f);
+        s.green = static_cast<uint8_t>((c * s.green + a * res.green) / sum + 0.5f);
+        s.blue = static_cast<uint8_t>((c * s.blue + a * res.blue) / sum + 0.5f);
       }
       s.confidence = sum;
       s.last_frame = frame_;
       s.keyframe = m.keyframe;
+      Touch(res.match);
       ++stats.merged;
     } else {
       Surfel s;
@@ -283,6 +367,8 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
       s.red = res.red, s.green = res.green, s.blue = res.blue;
       s.source = static_cast<uint8_t>(res.source);
       map_.Add(s);
+      if (chunks_.size() * kChunk < map_.size()) chunks_.emplace_back();
+      Touch(map_.size() - 1);
       ++stats.created;
     }
   }
@@ -296,17 +382,18 @@ void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
   // Free space: the surfels projected into this frame (those created just now were not) that the
   // sensor sees through: every measured depth in the 3x3 pixels around theirs lies farther by more
   // than free_space_margin, and at least five of them are measured.
-  const size_t projected = pixel_of_.size();
-  std::vector<uint8_t> seen_through(projected, 0);
+  const size_t entries = visible_.size();
+  std::vector<uint8_t> seen_through(entries, 0);
   const int width = camera_.width, height = camera_.height;
   const float margin = static_cast<float>(1.0 + options_.free_space_margin);
-  cv::parallel_for_(cv::Range(0, static_cast<int>(projected)), [&](const cv::Range& range) {
-    for (int i = range.start; i < range.end; ++i) {
-      const int pixel = pixel_of_[i];
-      if (pixel < 0 || map_[i].removed() || map_[i].last_frame == frame_) continue;
+  cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
+    for (int e = range.start; e < range.end; ++e) {
+      const int pixel = pixel_of_[e];
+      const Surfel& s = map_[visible_[e]];
+      if (pixel < 0 || s.removed() || s.last_frame == frame_) continue;
       const int x = pixel % width, y = pixel / width;
       if (x < 1 || y < 1 || x + 1 >= width || y + 1 >= height) continue;
-      const float z = in_camera_[i].z();
+      const float z = in_camera_[e].z();
       int measured = 0;
       bool behind = true;
       for (int dy = -1; dy <= 1 && behind; ++dy)
@@ -319,11 +406,12 @@ void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
             break;
           }
         }
-      seen_through[i] = behind && measured >= 5;
+      seen_through[e] = behind && measured >= 5;
     }
   });
-  for (size_t i = 0; i < projected; ++i) {
-    if (!seen_through[i]) continue;
+  for (size_t e = 0; e < entries; ++e) {
+    if (!seen_through[e]) continue;
+    const size_t i = visible_[e];
     Surfel& s = map_[i];
     ++stats->contradicted;
     const bool stable_sensor =
@@ -334,18 +422,29 @@ void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
       ++stats->removed;
     }
   }
-  // Unstable surfels that nothing confirmed in time.
-  for (size_t i = 0; i < map_.size(); ++i) {
+  // Unstable surfels that nothing confirmed in time: those in view every frame, the whole map
+  // every kFullSweep frames (out of view, they cannot be confirmed anyway).
+  auto stale = [&](size_t i) {
     const Surfel& s = map_[i];
-    if (s.removed() || IsStable(s)) continue;
+    if (s.removed() || IsStable(s)) return;
     const bool fill = s.source != static_cast<uint8_t>(DepthSource::kSensor);
     const int window = fill ? options_.fill_unstable_frames : options_.unstable_frames;
     if (frame_ - s.last_frame > window) {
       map_.Remove(i);
       ++stats->removed;
     }
+  };
+  constexpr int kFullSweep = 16;
+  if (frame_ % kFullSweep == 0) {
+    for (size_t i = 0; i < map_.size(); ++i) stale(i);
+  } else {
+    for (size_t e = 0; e < entries; ++e) stale(visible_[e]);
   }
+  const size_t before = map_.size();
   map_.Compact();
+  if (map_.size() != before) {  // indices moved: every chunk is new
+    chunks_.assign((map_.size() + kChunk - 1) / kChunk, Chunk());
+  }
 }
 
 bool SurfelFusion::IsStable(const Surfel& s) const {
@@ -379,7 +478,14 @@ SurfelCounts SurfelFusion::Counts() const {
 
 size_t SurfelFusion::MemoryBytes() const {
   return map_.surfels().capacity() * sizeof(Surfel) + index_map_.capacity() * sizeof(uint64_t) +
-         in_camera_.capacity() * sizeof(Eigen::Vector3f) + pixel_of_.capacity() * sizeof(int32_t);
+         (in_camera_.capacity() + normal_in_camera_.capacity()) * sizeof(Eigen::Vector3f) +
+         (pixel_of_.capacity() + visible_.capacity()) * sizeof(int32_t) +
+         chunks_.capacity() * sizeof(Chunk);
+}
+
+void SurfelFusion::AddSurfels(const std::vector<Surfel>& surfels) {
+  for (const Surfel& s : surfels) map_.Add(s);
+  chunks_.assign((map_.size() + kChunk - 1) / kChunk, Chunk());
 }
 
 void SurfelMap::Compact(double share) {

@@ -112,24 +112,41 @@ class SurfelFusion {
   int frames() const { return frame_; }
   // Bytes the map holds (capacity), for the memory figures.
   size_t MemoryBytes() const;
+  // Adds surfels as they are (a map read back, or copies for a benchmark of a large map).
+  void AddSurfels(const std::vector<Surfel>& surfels);
 
  private:
   struct Measurement;
   FusionStats Fuse(const Measurement& m);
   void ProjectMap(const SE3& camera_from_world);
   void CleanUp(const Measurement& m, FusionStats* stats);
+  void Touch(size_t surfel) { chunks_[surfel / kChunk].dirty = true; }
+  bool ChunkVisible(size_t chunk, const SE3& camera_from_world);
+
+  // Surfels are culled by chunks of kChunk consecutive ones (created together, so close together)
+  // with a bounding sphere, recomputed when a surfel in the chunk changed.
+  static constexpr size_t kChunk = 1024;
+  struct Chunk {
+    Eigen::Vector3f centre = Eigen::Vector3f::Zero();
+    float radius = 0;
+    bool dirty = true;
+  };
+  std::vector<Chunk> chunks_;
+  float view_x_[2] = {0, 0}, view_y_[2] = {0, 0};  // the image's extent in x/z and y/z
 
   Camera camera_;
   FusionOptions options_;
-  UndistortedPixels rays_;
+  cv::Mat rays_;  // CV_32FC2: each pixel's ray (x/z, y/z), lens distortion removed
   SurfelMap map_;
   int frame_ = 0;  // time steps (sensor frames) so far
   int fills_ = 0;  // fills fused so far (their pixel grid offset alternates too)
-  // Per fusion step: the projected index map (nearest surfel per pixel, packed depth and index),
-  // and each projected surfel's position in the camera and pixel.
+  // Per fusion step: the surfels of the chunks in view (entries: visible_ holds their map index),
+  // with their position and normal in the camera and their pixel (y * width + x, -1 when not in
+  // the image), and the projected index map (nearest entry per pixel, packed depth and entry).
+  std::vector<uint32_t> visible_;
+  std::vector<Eigen::Vector3f> in_camera_, normal_in_camera_;
+  std::vector<int32_t> pixel_of_;
   std::vector<uint64_t> index_map_;
-  std::vector<Eigen::Vector3f> in_camera_;
-  std::vector<int32_t> pixel_of_;  // y * width + x, -1 when not in the image
 };
 
 }  // namespace gf
