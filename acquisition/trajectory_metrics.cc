@@ -76,6 +76,24 @@ SE3 AlignPoints(const std::vector<Eigen::Vector3d>& model,
   return SE3(r, mu_m - r * mu_d);
 }
 
+SE3 AlignPoses(const Trajectory& gt, const Trajectory& est, double max_dt) {
+  const auto pairs = AssociatePoses(gt, est, max_dt);
+  if (pairs.empty()) return SE3();
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  for (const auto& [g, e] : pairs)
+    sum += gt[g].world_from_camera.RotationMatrix() *
+           est[e].world_from_camera.RotationMatrix().transpose();
+  // The rotation nearest the mean (its polar factor).
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d s = Eigen::Matrix3d::Identity();
+  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0) s(2, 2) = -1;
+  const Eigen::Matrix3d r = svd.matrixU() * s * svd.matrixV().transpose();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  for (const auto& [g, e] : pairs)
+    t += gt[g].world_from_camera.translation() - r * est[e].world_from_camera.translation();
+  return SE3(r, t / static_cast<double>(pairs.size()));
+}
+
 TrajectoryErrorSummary EvaluateTrajectory(const Trajectory& gt, const Trajectory& est,
                                           const TrajectoryErrorOptions& options) {
   std::string problem;

@@ -41,6 +41,13 @@ std::vector<std::pair<size_t, size_t>> AssociatePoses(const Trajectory& gt, cons
 SE3 AlignPoints(const std::vector<Eigen::Vector3d>& model,
                 const std::vector<Eigen::Vector3d>& data);
 
+// The rigid transform that best maps the estimate's camera poses onto the ground truth's, using
+// their orientations as well as their positions (the chordal mean of gt_R est_R^T, then the mean
+// position offset): unlike AlignPoints on positions alone, well determined when the camera moves
+// along a line. For moving a map into the ground truth's frame. Needs >= 1 associated pose; the
+// identity otherwise.
+SE3 AlignPoses(const Trajectory& gt, const Trajectory& est, double max_dt = 0.02);
+
 TrajectoryErrorSummary EvaluateTrajectory(const Trajectory& gt, const Trajectory& est,
                                           const TrajectoryErrorOptions& options = {});
 

@@ -8,6 +8,7 @@
 #include "apps/bench.h"
 #include "apps/capture.h"
 #include "apps/colmap.h"
+#include "apps/compare.h"
 #include "apps/demo.h"
 #include "apps/info.h"
 #include "apps/interrupt.h"
@@ -125,6 +126,35 @@ void RegisterCommands(CLI::App& app) {
       for (const std::string& w : s.warnings)
         std::fprintf(stderr, "warning: %s: %s\n", options->input.c_str(), w.c_str());
       std::cout << "reconstruct: " << s.BriefReport() << "; outputs in " << options->out_dir
+                << std::endl;
+    });
+  }
+  {
+    auto options = std::make_shared<ReconstructOptions>();
+    auto args = std::make_shared<InputArgs>();
+    auto range = std::make_shared<std::string>();
+    CLI::App* cmd = app.add_subcommand(
+        "compare",
+        "track INPUT once and fuse it twice, with and without the stereo fill; write "
+        "DIR/with_fill/, DIR/without_fill/ (run folders with map.ply), DIR/compare.json and "
+        "DIR/report.html (completeness per material where INPUT has ground truth)");
+    AddInputArgs(cmd, args.get());
+    cmd->add_option("--out", options->out_dir, "comparison folder")->required();
+    cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
+    cmd->add_option("--config", options->config_file, "JSON file of settings, as for reconstruct");
+    cmd->add_flag("--force", options->force, "replace an earlier comparison in --out");
+    cmd->add_flag("--allow-lost", options->allow_lost,
+                  "accept a run that loses tracking on most frames");
+    cmd->callback([options, args, range] {
+      if (!options->config_file.empty()) ApplyConfigFile(options->config_file, &options->pipeline);
+      options->input = args->input;
+      options->source = args->ToOptions();
+      if (!range->empty())
+        ParseFrameRange(*range, &options->pipeline.first_frame, &options->pipeline.end_frame);
+      const InterruptHandler interrupt;
+      options->interrupt = interrupt.signal();
+      const CompareSummary s = RunCompare(*options);
+      std::cout << "compare: " << s.BriefReport() << "; " << options->out_dir << "/report.html"
                 << std::endl;
     });
   }

@@ -38,11 +38,8 @@ void ParseFrameRange(const std::string& range, int* first, int* end) {
     throw InputError("--frames", "\"" + range + "\" needs 0 <= A < B");
 }
 
-ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
-  std::string problem;
-  if (!options.Check(&problem)) throw InputError(options.out_dir, "bad options: " + problem);
-  std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, options.source);
-  FolderRunSink sink(options.out_dir, options.force);
+ReconstructionSummary RunPipeline(const ReconstructOptions& options, FrameSource* source,
+                                  RunSink* sink, RunSink* without_fill, const std::string& label) {
   ReconstructionOptions pipeline = options.pipeline;
   pipeline.input_path = options.input;
   pipeline.config_file = options.config_file;
@@ -51,14 +48,14 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
   else if (fs::is_directory(options.input))
     pipeline.camera_file = (fs::path(options.input) / "camera.json").string();
   Reconstruction reconstruction(pipeline);
-  TerminalProgress progress("reconstruct", source->FrameCount());
+  TerminalProgress progress(label, source->FrameCount());
   ReconstructionCallbacks callbacks;
   callbacks.progress = [&](const ReconstructionProgress& p) { progress.Update(p.frames); };
   callbacks.stop = [&]() -> std::string {
     if (!options.interrupt || !*options.interrupt) return "";
     return "interrupted by " + SignalName(*options.interrupt);
   };
-  const ReconstructionSummary s = reconstruction.Run(*source, &sink, callbacks);
+  const ReconstructionSummary s = reconstruction.Run(*source, sink, callbacks, without_fill);
   progress.Finish();
   if (!s.complete)
     throw Interrupted(options.interrupt ? options.interrupt->load() : 0,
@@ -71,6 +68,15 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
                                         "`glassfusion info` shows its holes); --allow-lost "
                                         "accepts such a run");
   return s;
+}
+
+ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
+  std::string problem;
+  if (!options.Check(&problem)) throw InputError(options.out_dir, "bad options: " + problem);
+  // The input first: a bad input leaves no run folder behind.
+  std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, options.source);
+  FolderRunSink sink(options.out_dir, options.force);
+  return RunPipeline(options, source.get(), &sink, nullptr, "reconstruct");
 }
 
 }  // namespace gf

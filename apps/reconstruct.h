@@ -14,6 +14,7 @@
 
 #include "acquisition/frame_source.h"
 #include "pipeline/reconstruction.h"
+#include "pipeline/run_sink.h"
 
 namespace gf {
 
@@ -35,5 +36,11 @@ struct ReconstructOptions {
 void ParseFrameRange(const std::string& range, int* first, int* end);
 
 ReconstructionSummary RunReconstruct(const ReconstructOptions& options);
+
+// The pipeline over `source` (opened from options.input) into `sink` (and `without_fill`, may be
+// null: see Reconstruction::Run), with terminal progress labelled `label` and Ctrl-C; throws as
+// RunReconstruct does.
+ReconstructionSummary RunPipeline(const ReconstructOptions& options, FrameSource* source,
+                                  RunSink* sink, RunSink* without_fill, const std::string& label);
 
 }  // namespace gf

@@ -109,7 +109,10 @@ Reconstruction::Reconstruction(ReconstructionOptions options) : options_(std::mo
 }
 
 ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
-                                          const ReconstructionCallbacks& callbacks) {
+                                          const ReconstructionCallbacks& callbacks,
+                                          RunSink* without_fill) {
+  GF_CHECK(!without_fill || (options_.fill && options_.fusion),
+           "a run without fill beside this one needs the fill and the fusion");
   const auto start = Clock::now();
   ReconstructionProgress progress;
   progress.total = source.FrameCount();
@@ -123,10 +126,10 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   if (options_.fusion) {
     FusionStageOptions fusion_options = options_.fusion_options;
     fusion_options.drop_when_busy = live;
-    fusion = std::make_unique<FusionStage>(
-        source.camera(), fusion_options,
-        std::vector<FusionStage::Variant>{
-            {options_.fill ? "with_fill" : "without_fill", options_.fill, sink}});
+    std::vector<FusionStage::Variant> variants{
+        {options_.fill ? "with_fill" : "without_fill", options_.fill, sink}};
+    if (without_fill) variants.push_back({"without_fill", false, without_fill});
+    fusion = std::make_unique<FusionStage>(source.camera(), fusion_options, variants);
   }
   std::unique_ptr<FillStage> fill;
   if (options_.fill) {
@@ -211,6 +214,17 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   run_camera.depth_scale = 1000.0;
   sink->WriteCamera(run_camera);
   sink->WriteReport(summary.report);
+  if (without_fill) {
+    // The same tracking, fused without the fill: its own map and surfels, no fill.
+    summary.surfels_without_fill = fusion->Report(1)["count"];
+    summary.report_without_fill = summary.report;
+    summary.report_without_fill["config"]["stereo_fill"] = false;
+    summary.report_without_fill["fill"] = nullptr;
+    summary.report_without_fill["surfels"] = fusion->Report(1);
+    without_fill->WriteTrajectory(tracking.trajectory);
+    without_fill->WriteCamera(run_camera);
+    without_fill->WriteReport(summary.report_without_fill);
+  }
   poll();
   if (error) std::rethrow_exception(error);
   return summary;

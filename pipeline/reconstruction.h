@@ -79,8 +79,10 @@ struct ReconstructionSummary {
   double seconds = 0;      // the whole run, the fill's tail after tracking included
   double fps = 0;          // frames / seconds
   bool most_lost = false;  // tracking was lost on more than kMostFramesLost of the frames
-  std::vector<std::string> warnings;  // also in the report
-  nlohmann::ordered_json report;      // report.json as written
+  std::vector<std::string> warnings;           // also in the report
+  nlohmann::ordered_json report;               // report.json as written
+  nlohmann::ordered_json report_without_fill;  // ... in the without_fill folder, when there is one
+  long surfels_without_fill = 0;
   std::string BriefReport() const;
 };
 
@@ -89,8 +91,12 @@ class Reconstruction {
   // Throws InputError when options.Check() fails.
   explicit Reconstruction(ReconstructionOptions options);
   // Runs over `source`, writing to `sink`. See the file comment for how a run ends.
+  // `without_fill` (may be null): a second run folder for the same frames fused without the fill
+  // (compare); it gets the same trajectory and camera, its own map.ply and report.json (whose
+  // fill is null). It needs fill and fusion on.
   ReconstructionSummary Run(FrameSource& source, RunSink* sink,
-                            const ReconstructionCallbacks& callbacks = {});
+                            const ReconstructionCallbacks& callbacks = {},
+                            RunSink* without_fill = nullptr);
 
  private:
   ReconstructionOptions options_;

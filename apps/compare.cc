@@ -1,0 +1,231 @@
+#include "apps/compare.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include "acquisition/camera.h"
+#include "acquisition/errors.h"
+#include "acquisition/file_util.h"
+#include "acquisition/image_io.h"
+#include "acquisition/trajectory.h"
+#include "acquisition/trajectory_metrics.h"
+#include "apps/report_html.h"
+#include "surfels/completeness.h"
+#include "surfels/ply.h"
+#include "surfels/render.h"
+
+namespace fs = std::filesystem;
+
+namespace gf {
+namespace {
+
+using json = nlohmann::ordered_json;
+
+// A synthetic capture's ground truth (glassfusion synth): the mesh, its materials' names, the true
+// poses and every 5th frame's true depth.
+struct Truth {
+  TriangleMesh mesh;
+  Camera camera;
+  Trajectory poses;
+  std::vector<TruthView> views;
+  std::vector<std::string> materials;
+};
+
+std::optional<Truth> LoadTruth(const std::string& input) {
+  const fs::path dir(input);
+  for (const char* need : {"scene.ply", "groundtruth.txt", "depth.txt", "camera.json"})
+    if (!IsRegularFile((dir / need).string())) return std::nullopt;
+  if (!IsDirectory((dir / "gt" / "depth").string())) return std::nullopt;
+  Truth t;
+  t.mesh = ReadTriangleMeshPly((dir / "scene.ply").string());
+  const CameraFile camera = LoadCameraFile((dir / "camera.json").string());
+  t.camera = camera.camera;
+  t.poses = ReadTumTrajectory((dir / "groundtruth.txt").string());
+  t.materials = {"diffuse", "glossy", "dark", "textured_glass", "clear_glass"};
+  if (IsRegularFile((dir / "synth.json").string())) {
+    const json synth = json::parse(ReadTextFile((dir / "synth.json").string()));
+    if (synth.contains("materials"))
+      t.materials = synth["materials"].get<std::vector<std::string>>();
+  }
+  std::istringstream lines(ReadTextFile((dir / "depth.txt").string()));
+  std::string line;
+  for (int k = 0; std::getline(lines, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    const std::string ts = line.substr(0, line.find(' '));
+    if (k++ % 5) continue;
+    for (const StampedPose& p : t.poses) {
+      if (p.timestamp_text != ts) continue;
+      const cv::Mat raw = ReadDepthImage((dir / "gt" / "depth" / (ts + ".png")).string());
+      cv::Mat metres;
+      raw.convertTo(metres, CV_32F, 1.0 / camera.depth_scale);
+      t.views.push_back({metres, p.world_from_camera});
+      break;
+    }
+  }
+  return t;
+}
+
+json Within(const Completeness& c) {
+  if (c.within.size() < 2) return json();
+  return {
+      {"within_1cm", c.within[0]}, {"within_2cm", c.within[1]}, {"observed_samples", c.observed}};
+}
+
+std::string Percent(const json& share) {
+  if (!share.is_number()) return "-";
+  char buffer[16];
+  std::snprintf(buffer, sizeof(buffer), "%.1f%%", 100 * share.get<double>());
+  return buffer;
+}
+
+// Both maps rendered from the same two viewpoints: the middle frame's, and looking down on the map
+// from above and behind that camera.
+std::vector<std::pair<std::string, std::string>> Renderings(const std::string& out_dir,
+                                                            const Camera& camera,
+                                                            const Trajectory& trajectory) {
+  const std::vector<Surfel> with =
+      ReadSurfelPly((fs::path(out_dir) / "with_fill/map.ply").string());
+  const std::vector<Surfel> without =
+      ReadSurfelPly((fs::path(out_dir) / "without_fill/map.ply").string());
+  if (trajectory.empty() || with.empty()) return {};
+  const SE3 middle = trajectory[trajectory.size() / 2].world_from_camera;
+  const Eigen::Matrix3d r = middle.RotationMatrix();
+  const SE3 above = ViewOfMap(with, camera, r * Eigen::Vector3d(0, 0.8, 0.6), -r.col(1));
+  std::vector<std::pair<std::string, std::string>> images;
+  for (const auto& [pose, view] : {std::pair{middle, "camera"}, std::pair{above, "above"}})
+    for (const auto& [map, name] :
+         {std::pair{&with, "with_fill"}, std::pair{&without, "without_fill"}}) {
+      const std::string file = std::string(name) + "_" + view + ".png";
+      WriteImage((fs::path(out_dir) / file).string(), RenderSurfels(*map, camera, pose, {}).color);
+      images.push_back({file, std::string(name == std::string("with_fill") ? "with" : "without") +
+                                  " the fill, seen from " +
+                                  (view == std::string("camera") ? "the middle frame" : "above")});
+    }
+  return images;
+}
+
+void WriteReport(const std::string& out_dir, const std::string& input, const json& compare,
+                 const std::vector<std::pair<std::string, std::string>>& images) {
+  HtmlReport r("GlassFusion: the model with and without the stereo fill");
+  r.Paragraph("Input: " + input +
+              ". One tracking run, fused twice: the sensor's depth with the "
+              "keyframes' stereo fills (with_fill/) and without them (without_fill/).");
+  std::vector<std::vector<std::string>> rows;
+  for (const char* v : {"with_fill", "without_fill"}) {
+    const json& s = compare[v]["surfels"];
+    rows.push_back({v, std::to_string(s["count"].get<long>()),
+                    std::to_string(s["by_source"]["sensor"].get<long>()),
+                    std::to_string(s["by_source"]["stereo_fill"].get<long>())});
+  }
+  r.Table({"map", "surfels", "from the sensor", "from the stereo fill"}, rows);
+  std::vector<PlotSeries> series;
+  for (const auto& [v, color] : {std::pair{"with_fill", "#1b7837"}, {"without_fill", "#762a83"}}) {
+    PlotSeries s{v, color, {}};
+    for (const json& c : compare[v]["surfels"]["count_over_time"])
+      s.points.push_back({c["frame"].get<double>(), c["stable"].get<double>()});
+    series.push_back(s);
+  }
+  r.Figure(LinePlotSvg(series, "frame", "stable surfels"),
+           "The model's size as the capture goes on");
+  if (compare["with_fill"].contains("completeness")) {
+    std::vector<std::vector<std::string>> table;
+    const json& w = compare["with_fill"]["completeness"];
+    const json& wo = compare["without_fill"]["completeness"];
+    table.push_back({"all observed", Percent(w["overall"]["within_2cm"]),
+                     Percent(wo["overall"]["within_2cm"])});
+    for (const auto& [name, c] : w["per_material"].items())
+      table.push_back(
+          {name, Percent(c["within_2cm"]), Percent(wo["per_material"][name]["within_2cm"])});
+    r.Heading("Completeness against the ground truth");
+    r.Table({"surface", "within 2 cm, with fill", "without fill"}, table);
+  }
+  if (!images.empty()) {
+    r.Heading("The two models");
+    r.Images(images, 440);
+  }
+  r.Preformatted(compare.dump(2));
+  WriteTextFileAtomically((fs::path(out_dir) / "report.html").string(), r.Html());
+}
+
+}  // namespace
+
+std::string CompareSummary::BriefReport() const {
+  char buffer[240];
+  std::snprintf(buffer, sizeof(buffer), "%d frames, %ld surfels with the fill, %ld without",
+                run.frames, run.surfels, run.surfels_without_fill);
+  return buffer;
+}
+
+json EvaluateMapAgainstTruth(const std::string& input, const std::string& run_dir) {
+  const std::optional<Truth> truth = LoadTruth(input);
+  if (!truth) return json();
+  const Trajectory est = ReadTumTrajectory((fs::path(run_dir) / "trajectory.txt").string());
+  const TrajectoryErrorSummary ate = EvaluateTrajectory(truth->poses, est);
+  if (!ate.success) return json();
+  std::vector<Surfel> map = ReadSurfelPly((fs::path(run_dir) / "map.ply").string());
+  const SE3 gt_from_run = AlignPoses(truth->poses, est);
+  const Eigen::Matrix3f r = gt_from_run.RotationMatrix().cast<float>();
+  const Eigen::Vector3f t = gt_from_run.translation().cast<float>();
+  for (Surfel& s : map) s.position = r * s.position + t, s.normal = r * s.normal;
+  const MapScore score = ScoreMap(map, truth->mesh, truth->camera, truth->views, {});
+  json per_material = json::object();
+  for (size_t m = 0; m < truth->materials.size(); ++m)
+    if (score.per_material[m].observed > 0)
+      per_material[truth->materials[m]] = Within(score.per_material[m]);
+  const int stereo = static_cast<int>(DepthSource::kStereo);
+  return {
+      {"completeness", {{"overall", Within(score.overall)}, {"per_material", per_material}}},
+      {"accuracy",
+       {{"median_m", score.accuracy_median_m},
+        {"p90_m", score.accuracy_p90_m},
+        {"fill_surfels", score.source_points[stereo]},
+        {"fill_median_m",
+         score.source_points[stereo] ? json(score.source_median_m[stereo]) : json()},
+        {"fill_p90_m", score.source_points[stereo] ? json(score.source_p90_m[stereo]) : json()}}},
+      {"ate_m", ate.ate_rmse_m}};
+}
+
+CompareSummary RunCompare(const ReconstructOptions& given) {
+  ReconstructOptions options = given;
+  options.pipeline.fill = options.pipeline.fusion = true;
+  std::string problem;
+  if (!options.Check(&problem)) throw InputError(options.out_dir, "bad options: " + problem);
+  std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, options.source);
+  const fs::path out(options.out_dir);
+  std::error_code ec;
+  if (fs::is_directory(out, ec) && !fs::is_empty(out, ec)) {
+    const bool earlier = fs::exists(out / "compare.json") || fs::exists(out / "with_fill");
+    if (!options.force || !earlier)
+      throw InputError(options.out_dir, earlier ? "holds an earlier comparison; --force replaces it"
+                                                : "is not empty and holds no comparison");
+    fs::remove_all(out, ec);
+  }
+  fs::create_directories(out, ec);
+  if (ec) throw InputError(options.out_dir, "cannot create output folder: " + ec.message());
+  FolderRunSink with((out / "with_fill").string(), false);
+  FolderRunSink without((out / "without_fill").string(), false);
+  CompareSummary summary;
+  summary.run = RunPipeline(options, source.get(), &with, &without, "compare");
+  json& c = summary.compare;
+  c["input"] = options.input;
+  c["frames"] = summary.run.frames;
+  for (const char* v : {"with_fill", "without_fill"}) {
+    c[v]["surfels"] = std::string(v) == "with_fill" ? summary.run.report["surfels"]
+                                                    : summary.run.report_without_fill["surfels"];
+    const json truth = EvaluateMapAgainstTruth(options.input, (out / v).string());
+    if (truth.is_null()) continue;
+    c[v]["completeness"] = truth["completeness"];
+    c[v]["accuracy"] = truth["accuracy"];
+    c["ate_m"] = truth["ate_m"];
+  }
+  WriteTextFileAtomically((out / "compare.json").string(), c.dump(2) + "\n");
+  const Trajectory trajectory = ReadTumTrajectory((out / "with_fill/trajectory.txt").string());
+  WriteReport(options.out_dir, options.input, c,
+              Renderings(options.out_dir, source->camera(), trajectory));
+  return summary;
+}
+
+}  // namespace gf

@@ -1,0 +1,40 @@
+// `glassfusion compare INPUT --out DIR`: track once, fuse twice (sensor plus fill; sensor only),
+// and show what the fill adds to the model.
+//
+// Writes DIR/with_fill/ and DIR/without_fill/ (each a complete run folder: trajectory.txt,
+// map.ply, report.json; keyframes/ in with_fill), DIR/compare.json and DIR/report.html with the
+// surfel count over time of both maps, renderings of both from the same viewpoints and, where the
+// input has ground truth (a synthetic capture: scene.ply, gt/depth/, groundtruth.txt), their
+// completeness and accuracy overall and per material (surfels/completeness.h; the maps are moved
+// into the ground truth's frame by the rigid transform that best maps the run's camera poses onto
+// the true ones, AlignPoses: positions alone leave it undetermined when the camera moves along a
+// line, as in a 40-frame orbit).
+//
+// compare.json: {"with_fill": {...}, "without_fill": {...}}, each with "surfels" (report.json's)
+// and, with ground truth, "completeness" ({"overall", "per_material": {name: ...}}, each
+// {"within_1cm", "within_2cm"} as shares 0-1) and "accuracy" ({"median_m", "p90_m", and
+// "fill_median_m", "fill_p90_m" over the fill's surfels}); plus "ate_m".
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "apps/reconstruct.h"
+
+namespace gf {
+
+struct CompareSummary {
+  ReconstructionSummary run;
+  nlohmann::ordered_json compare;  // compare.json
+  std::string BriefReport() const;
+};
+
+// options.out_dir is DIR; options.pipeline.fill and fusion are forced on.
+CompareSummary RunCompare(const ReconstructOptions& options);
+
+// The ground-truth part of compare.json for one map (in the run's frame), or null when `input`
+// has no ground truth.
+nlohmann::ordered_json EvaluateMapAgainstTruth(const std::string& input,
+                                               const std::string& run_dir);
+
+}  // namespace gf

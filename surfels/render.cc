@@ -1,0 +1,92 @@
+#include "surfels/render.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "acquisition/errors.h"
+
+namespace gf {
+
+bool RenderOptions::Check(std::string* message) const {
+  if (max_splat_px < 0 || !(min_depth_m > 0)) {
+    if (message) *message = "render: max_splat_px >= 0, positive min_depth_m";
+    return false;
+  }
+  return true;
+}
+
+SurfelImage RenderSurfels(const std::vector<Surfel>& surfels, const Camera& camera,
+                          const SE3& world_from_camera, const RenderOptions& options) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+  SurfelImage out;
+  out.color = cv::Mat(camera.height, camera.width, CV_8UC3, options.background);
+  out.depth = cv::Mat::zeros(camera.height, camera.width, CV_32FC1);
+  const SE3 camera_from_world = world_from_camera.Inverse();
+  const Eigen::Matrix3d r = camera_from_world.RotationMatrix();
+  const double focal = 0.5 * (camera.fx + camera.fy);
+  for (const Surfel& s : surfels) {
+    if (s.removed()) continue;
+    const Eigen::Vector3d q = camera_from_world * s.position.cast<double>();
+    if (q.z() < options.min_depth_m) continue;
+    const Eigen::Vector2d uv = camera.ProjectDistorted(q);
+    const int radius =
+        std::min(options.max_splat_px, static_cast<int>(std::ceil(s.radius * focal / q.z() - 0.5)));
+    const int cx = static_cast<int>(std::lround(uv.x())),
+              cy = static_cast<int>(std::lround(uv.y()));
+    if (cx + radius < 0 || cy + radius < 0 || cx - radius >= camera.width ||
+        cy - radius >= camera.height)
+      continue;
+    double shade = 1.0;
+    if (options.shade) {
+      const Eigen::Vector3d n = r * s.normal.cast<double>();
+      shade = 0.35 + 0.65 * std::abs(n.dot(q.normalized()));
+    }
+    auto channel = [&](uint8_t c) { return static_cast<uint8_t>(c * shade + 0.5); };
+    const cv::Vec3b color(channel(s.blue), channel(s.green), channel(s.red));
+    const float z = static_cast<float>(q.z());
+    for (int dy = -radius; dy <= radius; ++dy)
+      for (int dx = -radius; dx <= radius; ++dx) {
+        if (dx * dx + dy * dy > radius * radius + radius) continue;
+        const int x = cx + dx, y = cy + dy;
+        if (x < 0 || y < 0 || x >= camera.width || y >= camera.height) continue;
+        float& d = out.depth.at<float>(y, x);
+        if (d > 0 && d <= z) continue;
+        d = z;
+        out.color.at<cv::Vec3b>(y, x) = color;
+      }
+  }
+  return out;
+}
+
+SE3 ViewOfMap(const std::vector<Surfel>& surfels, const Camera& camera,
+              const Eigen::Vector3d& direction, const Eigen::Vector3d& up) {
+  GF_CHECK(direction.norm() > 0 && up.cross(direction).norm() > 0,
+           "a view needs a direction and an up that is not along it");
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  long n = 0;
+  for (const Surfel& s : surfels)
+    if (!s.removed()) centre += s.position.cast<double>(), ++n;
+  if (n > 0) centre /= n;
+  // The 90th percentile of distances from the centre: stray surfels do not set the framing.
+  std::vector<double> distances;
+  for (const Surfel& s : surfels)
+    if (!s.removed()) distances.push_back((s.position.cast<double>() - centre).norm());
+  double extent = 1.0;
+  if (!distances.empty()) {
+    std::nth_element(distances.begin(), distances.begin() + distances.size() * 9 / 10,
+                     distances.end());
+    extent = std::max(0.05, distances[distances.size() * 9 / 10]);
+  }
+  const double half_fov =
+      std::atan(0.5 * std::min(camera.width / camera.fx, camera.height / camera.fy));
+  const double distance = extent / std::tan(0.8 * half_fov);
+  const Eigen::Vector3d z = direction.normalized();              // the camera's optical axis
+  const Eigen::Vector3d y = (-up + up.dot(z) * z).normalized();  // image down: against `up`
+  const Eigen::Vector3d x = y.cross(z);                          // image right (x cross y = z)
+  Eigen::Matrix3d world_from_camera_rotation;
+  world_from_camera_rotation << x, y, z;
+  return SE3(world_from_camera_rotation, centre - distance * z);
+}
+
+}  // namespace gf

@@ -1,0 +1,45 @@
+// Rendering surfels as discs into a camera (a CPU splat renderer): colour and depth images of a
+// map from any viewpoint, for reports and for frame-to-model tracking (the model's depth at the
+// predicted pose).
+//
+// Each surfel covers the pixels within its radius (r f / z pixels) around its projection, nearest
+// depth first; colour is the surfel's own, optionally shaded by how squarely its normal faces the
+// camera (so that shapes read in a picture).
+//
+// No threads, no I/O. Usage:
+//   gf::SurfelImage image = gf::RenderSurfels(surfels, camera, world_from_camera, {});
+//   cv::imwrite("view.png", image.color);
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "acquisition/camera.h"
+#include "acquisition/se3.h"
+#include "surfels/surfel_map.h"
+
+namespace gf {
+
+struct RenderOptions {
+  bool shade = true;                    // colour times (0.35 + 0.65 |n . view|)
+  int max_splat_px = 8;                 // largest disc radius drawn, pixels
+  double min_depth_m = 0.1;             // nearer surfels are not drawn
+  cv::Vec3b background{255, 255, 255};  // BGR where nothing is drawn
+  bool Check(std::string* message = nullptr) const;
+};
+
+struct SurfelImage {
+  cv::Mat color;  // CV_8UC3 BGR
+  cv::Mat depth;  // CV_32F metres along the optical axis, 0 = none
+};
+
+// The camera's projection includes its lens distortion (as the frames' pixels do).
+SurfelImage RenderSurfels(const std::vector<Surfel>& surfels, const Camera& camera,
+                          const SE3& world_from_camera, const RenderOptions& options);
+
+// A viewpoint that sees the whole map: looking at its centroid from `direction` (world frame, from
+// the camera towards the map), far enough that the map's extent fills about 80% of the image.
+SE3 ViewOfMap(const std::vector<Surfel>& surfels, const Camera& camera,
+              const Eigen::Vector3d& direction, const Eigen::Vector3d& up);
+
+}  // namespace gf
