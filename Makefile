@@ -12,7 +12,7 @@ DEB_PACKAGES := cmake make g++ pkg-config \
   libopenni2-dev libfreenect-dev \
   libcli11-dev nlohmann-json3-dev libspdlog-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
-  python3-numpy python3-opencv \
+  python3-numpy python3-opencv python3-open3d \
   colmap
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)

@@ -225,7 +225,14 @@ void RegisterCommands(CLI::App& app) {
     cmd->add_option("--est", *est, "estimate: TUM text or Redwood .log")->required();
     cmd->add_option("--max-dt", options->max_dt, "association window, seconds")
         ->capture_default_str();
-    cmd->callback([gt, est, options] {
+    auto map = std::make_shared<std::string>();
+    auto mesh = std::make_shared<std::string>();
+    cmd->add_option("--map", *map, "map.ply of the run whose trajectory --est is");
+    cmd->add_option("--gt-mesh", *mesh,
+                    "ground-truth mesh (a synthetic capture's scene.ply): the map's accuracy and "
+                    "completeness, overall and per material");
+    cmd->callback([gt, est, options, map, mesh] {
+      if (map->empty() != mesh->empty()) throw InputError("--map", "needs --gt-mesh too");
       std::string problem;
       if (!options->Check(&problem)) throw InputError("--max-dt", problem);
       const TrajectoryErrorSummary s =
@@ -254,6 +261,13 @@ void RegisterCommands(CLI::App& app) {
                      warnings.back().get<std::string>().c_str());
       }
       j["warnings"] = warnings;
+      if (!map->empty()) {
+        const nlohmann::ordered_json m =
+            EvaluateMapFiles(*map, *mesh, ReadTrajectory(*gt), ReadTrajectory(*est));
+        j["map"] = *map;
+        j["completeness"] = m["completeness"];
+        j["accuracy"] = m["accuracy"];
+      }
       std::cout << j.dump(2) << std::endl;
     });
   }

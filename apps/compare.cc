@@ -150,22 +150,12 @@ void WriteReport(const std::string& out_dir, const std::string& input, const jso
   WriteTextFileAtomically((fs::path(out_dir) / "report.html").string(), r.Html());
 }
 
-}  // namespace
-
-std::string CompareSummary::BriefReport() const {
-  char buffer[240];
-  std::snprintf(buffer, sizeof(buffer), "%d frames, %ld surfels with the fill, %ld without",
-                run.frames, run.surfels, run.surfels_without_fill);
-  return buffer;
-}
-
-json EvaluateMapAgainstTruth(const std::string& input, const std::string& run_dir) {
-  const std::optional<Truth> truth = LoadTruth(input);
-  if (!truth) return json();
-  const Trajectory est = ReadTumTrajectory((fs::path(run_dir) / "trajectory.txt").string());
+// compare.json's ground-truth part for the map at map_path, whose run followed `est`.
+json ScoreMapFile(const std::string& map_path, const Trajectory& est, const Truth& truth_in) {
+  const Truth* truth = &truth_in;
   const TrajectoryErrorSummary ate = EvaluateTrajectory(truth->poses, est);
-  if (!ate.success) return json();
-  std::vector<Surfel> map = ReadSurfelPly((fs::path(run_dir) / "map.ply").string());
+  if (!ate.success) throw InputError(map_path, "its trajectory does not match the ground truth's");
+  std::vector<Surfel> map = ReadSurfelPly(map_path);
   const SE3 gt_from_run = AlignPoses(truth->poses, est);
   const Eigen::Matrix3f r = gt_from_run.RotationMatrix().cast<float>();
   const Eigen::Vector3f t = gt_from_run.translation().cast<float>();
@@ -187,6 +177,36 @@ json EvaluateMapAgainstTruth(const std::string& input, const std::string& run_di
         {"fill_p90_m", score.source_points[stereo] ? json(score.source_p90_m[stereo]) : json()}}},
       {"ate_m", ate.ate_rmse_m}};
 }
+
+}  // namespace
+
+std::string CompareSummary::BriefReport() const {
+  char buffer[240];
+  std::snprintf(buffer, sizeof(buffer), "%d frames, %ld surfels with the fill, %ld without",
+                run.frames, run.surfels, run.surfels_without_fill);
+  return buffer;
+}
+
+json EvaluateMapAgainstTruth(const std::string& input, const std::string& run_dir) {
+  std::optional<Truth> truth = LoadTruth(input);
+  if (!truth) return json();
+  return ScoreMapFile((fs::path(run_dir) / "map.ply").string(),
+                      ReadTumTrajectory((fs::path(run_dir) / "trajectory.txt").string()), *truth);
+}
+
+json EvaluateMapFiles(const std::string& map_path, const std::string& mesh_path,
+                      const Trajectory& gt, const Trajectory& est) {
+  // A synthetic capture's scene.ply: its folder's true depth decides what was observed.
+  std::optional<Truth> truth = LoadTruth(fs::path(mesh_path).parent_path().string());
+  if (!truth || fs::path(mesh_path).filename() != "scene.ply") {
+    truth = Truth();
+    truth->mesh = ReadTriangleMeshPly(mesh_path);
+    truth->materials = {"diffuse", "glossy", "dark", "textured_glass", "clear_glass"};
+  }
+  truth->poses = gt;
+  return ScoreMapFile(map_path, est, *truth);
+}
+
 
 CompareSummary RunCompare(const ReconstructOptions& given) {
   ReconstructOptions options = given;

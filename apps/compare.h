@@ -19,6 +19,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "acquisition/trajectory.h"
+#include "acquisition/trajectory.h"
 #include "apps/reconstruct.h"
 
 namespace gf {
@@ -36,5 +38,11 @@ CompareSummary RunCompare(const ReconstructOptions& options);
 // has no ground truth.
 nlohmann::ordered_json EvaluateMapAgainstTruth(const std::string& input,
                                                const std::string& run_dir);
+
+// `glassfusion eval --map M --gt-mesh MESH`: the same for a map file, with the ground truth's and
+// the run's trajectories (for the alignment). When MESH is a synthetic capture's scene.ply, its
+// folder's true depth decides which surfaces were observed; otherwise every surface counts.
+nlohmann::ordered_json EvaluateMapFiles(const std::string& map_path, const std::string& mesh_path,
+                                        const Trajectory& gt, const Trajectory& est);
 
 }  // namespace gf

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
@@ -122,6 +123,28 @@ TEST(Reconstruction, TracksAndFillsTheSyntheticGlassTable) {
     EXPECT_EQ(cv::norm(k.fill.filled_depth, k.frame.depth, cv::NORM_INF, k.frame.hole_mask == 0),
               0.0)
         << name;
+  // The surfel map: written, with the sensor's surfels and the confirmed fills', the fills on the
+  // true surfaces (distance along their normal, in the run's frame moved by the first true pose).
+  ASSERT_TRUE(sink.map_written);
+  EXPECT_EQ(static_cast<long>(sink.map.size()), s.surfels);
+  EXPECT_EQ(r["surfels"]["count"], s.surfels);
+  EXPECT_GT(r["surfels"]["by_source"]["sensor"].get<long>(), 10000);
+  EXPECT_GT(r["surfels"]["by_source"]["stereo_fill"].get<long>(), 500);
+  const synth::Scene scene = synth::Scene::Make("glass-table", 4);
+  const SE3 world_from_run = c.truth[0].world_from_camera;
+  std::vector<double> fill_errors;
+  for (const Surfel& surfel : sink.map) {
+    if (surfel.source != static_cast<uint8_t>(DepthSource::kStereo)) continue;
+    const Eigen::Vector3d p = world_from_run * surfel.position.cast<double>();
+    const Eigen::Vector3d n = world_from_run.RotationMatrix() * surfel.normal.cast<double>();
+    synth::Hit hit;
+    fill_errors.push_back(scene.Intersect(p + 0.05 * n, -n, 0.0, 0.1, false, &hit)
+                              ? std::abs(hit.t - 0.05)
+                              : 1.0);
+  }
+  std::sort(fill_errors.begin(), fill_errors.end());
+  ASSERT_FALSE(fill_errors.empty());
+  EXPECT_LT(fill_errors[fill_errors.size() / 2], 0.01);
 }
 
 // A keyframe the fill cannot take (its colour has an alpha channel, which the stereo refuses) is
