@@ -43,7 +43,7 @@ build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
 test: build
-	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) --repeat after-timeout:2
 
 # The unit tests (not the end-to-end CLI tests, label "tests") built with AddressSanitizer and
 # UndefinedBehaviorSanitizer; CI runs it after `make test`.
@@ -53,7 +53,7 @@ sanitize: deps
 	cmake --build $(SANITIZE_DIR) -j $(JOBS)
 	cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
-	  ctest --output-on-failure -j $(JOBS) -LE '^tests$$'
+	  ctest --output-on-failure -j $(JOBS) -LE '^tests$$' --repeat after-timeout:2
 
 demo: build
 	$(BUILD_DIR)/apps/glassfusion demo --out $(DEMO_OUT)

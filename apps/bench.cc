@@ -26,6 +26,7 @@
 #include "registration/tracker.h"
 #include "sfm/keyframe_filler.h"
 #include "sfm/stereo_fill.h"
+#include "surfels/fusion.h"
 
 namespace fs = std::filesystem;
 
@@ -203,6 +204,27 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
       progress.Update(static_cast<int>(ours.ms.size()));
     }
     results.push_back(std::move(ours));
+  }
+  if (options.frame_to_model) {
+    // The same tracker refined against the surfel map of the frames before each one, fused as it
+    // goes (the pipeline's --frame-to-model, without threads); ms include the fusion.
+    MethodResult model{"glassfusion frame-to-model ICP (+ fusion)", {}, {}, 0};
+    FrameToKeyframeTracker tracker(camera, options.pipeline.tracker);
+    SurfelFusion fusion(camera, options.pipeline.fusion_options.fusion);
+    TerminalProgress progress("bench: glassfusion frame-to-model", static_cast<int>(frames.size()));
+    SE3 last;
+    for (size_t i = 0; i < frames.size(); ++i) {
+      const auto t0 = Clock::now();
+      if (i > 0) tracker.SetModelReference(fusion.RenderDepth(last), last);
+      const TrackingResult r = tracker.Track(frames[i]);
+      if (r.status != TrackingStatus::kLost) fusion.FuseFrame(frames[i], r.world_from_camera, 0);
+      last = r.world_from_camera;
+      model.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+      model.failures += r.status == TrackingStatus::kLost;
+      model.trajectory.push_back({frames[i].timestamp, frames[i].timestamp_text, last});
+      progress.Update(static_cast<int>(i + 1));
+    }
+    results.push_back(std::move(model));
   }
   nlohmann::ordered_json stereo_fill;
   if (options.fill_every > 0)

@@ -35,6 +35,8 @@ struct BenchOptions {
   // Also time the surfel fusion per frame, on one core and on two, with our tracked poses, and
   // with a map of about a million surfels (apps/bench_fusion.h).
   bool fusion = false;
+  // Also our tracker refined against the surfel map (frame-to-model), fused as it goes.
+  bool frame_to_model = false;
   FrameSourceOptions source;
   // Ours, as reconstruct runs them (--config FILE may change them): the tracker, the fill (pairs,
   // stereo, also the OpenCV SGBM peer's settings, carry) and the fusion.

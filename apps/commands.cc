@@ -98,6 +98,9 @@ void RegisterCommands(CLI::App& app) {
     cmd->add_flag("--no-fill", *no_fill, "no stereo hole filling of keyframes (sensor depth only)");
     auto no_fusion = std::make_shared<bool>(false);
     cmd->add_flag("--no-fusion", *no_fusion, "no surfel map (map.ply)");
+    cmd->add_flag("--frame-to-model", options->pipeline.frame_to_model,
+                  "refine each frame's pose against the surfel map of the frames before it "
+                  "(after aligning it to its keyframe)");
     auto sweep_all = std::make_shared<bool>(false);
     cmd->add_flag("--sweep-all", *sweep_all,
                   "plane-sweep every keyframe pair (default: rectified SGBM for sideways pairs, "
@@ -173,6 +176,8 @@ void RegisterCommands(CLI::App& app) {
         "--fill-every", options->fill_every,
         "also time stereo hole filling on one core, every K-th frame a keyframe, paired "
         "and filled as reconstruct does with the tracked poses (0: off)");
+    cmd->add_flag("--frame-to-model", options->frame_to_model,
+                  "also our tracker refined against the surfel map of the frames before each one");
     cmd->add_flag("--fusion", options->fusion,
                   "also time the surfel fusion per frame on one core and on two, and with a map "
                   "of about a million surfels");

@@ -207,7 +207,6 @@ json EvaluateMapFiles(const std::string& map_path, const std::string& mesh_path,
   return ScoreMapFile(map_path, est, *truth);
 }
 
-
 CompareSummary RunCompare(const ReconstructOptions& given) {
   ReconstructOptions options = given;
   options.pipeline.fill = options.pipeline.fusion = true;

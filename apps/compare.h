@@ -20,7 +20,6 @@
 #include <string>
 
 #include "acquisition/trajectory.h"
-#include "acquisition/trajectory.h"
 #include "apps/reconstruct.h"
 
 namespace gf {

@@ -7,9 +7,9 @@
 #   repository root, so headers are included as "acquisition/camera.h". A module with no sources yet
 #   becomes an INTERFACE library that only carries its dependencies.
 #
-# gf_add_test(MODULE NAME SOURCES a_test.cc ... [LIBS ...])
+# gf_add_test(MODULE NAME SOURCES a_test.cc ... [LIBS ...] [TIMEOUT seconds])
 #   Builds a GoogleTest executable and registers its tests as MODULE/NAME so that
-#   `ctest -R MODULE/` runs one module.
+#   `ctest -R MODULE/` runs one module. Each test times out after TIMEOUT seconds (900).
 
 function(gf_add_library NAME)
   cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
@@ -45,7 +45,10 @@ function(gf_add_test MODULE NAME)
   if(NOT GF_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS" ${ARGN})
+  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS" ${ARGN})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 900)
+  endif()
   set(target ${MODULE}_${NAME})
   add_executable(${target} ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main)
@@ -57,5 +60,5 @@ function(gf_add_test MODULE NAME)
   gtest_discover_tests(${target}
     TEST_PREFIX "${MODULE}/${NAME}."
     DISCOVERY_TIMEOUT 60
-    PROPERTIES LABELS ${MODULE})
+    PROPERTIES LABELS ${MODULE} TIMEOUT ${ARG_TIMEOUT})
 endfunction()

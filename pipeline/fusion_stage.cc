@@ -129,8 +129,31 @@ void FusionStage::Run() {
   Item item;
   while (!cancelled_ && queue_.Pop(&item)) {
     for (Map& m : maps_) Fuse(item, &m);
-    if (!item.fill) ++frames_fused_;
+    if (item.fill) continue;
+    ++frames_fused_;
+    if (options_.predict) {
+      cv::Mat depth = maps_.front().fusion.RenderDepth(item.world_from_camera);
+      std::lock_guard<std::mutex> lock(prediction_mutex_);
+      prediction_depth_ = depth;
+      prediction_pose_ = item.world_from_camera;
+      prediction_frames_ = frames_fused_;
+      prediction_ready_.notify_all();
+    }
   }
+  std::lock_guard<std::mutex> lock(prediction_mutex_);
+  prediction_closed_ = true;
+  prediction_ready_.notify_all();
+}
+
+bool FusionStage::Prediction(int frames, std::chrono::milliseconds timeout, cv::Mat* depth,
+                             SE3* world_from_camera) {
+  std::unique_lock<std::mutex> lock(prediction_mutex_);
+  prediction_ready_.wait_for(lock, timeout,
+                             [&] { return prediction_closed_ || prediction_frames_ >= frames; });
+  if (prediction_depth_.empty() || prediction_frames_ < frames) return false;
+  *depth = prediction_depth_;
+  *world_from_camera = prediction_pose_;
+  return true;
 }
 
 void FusionStage::Fuse(const Item& item, Map* m) {

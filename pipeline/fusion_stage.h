@@ -18,6 +18,8 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <functional>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -41,6 +43,9 @@ struct FusionStageOptions {
   int count_every = 10;        // surfel counts are recorded every this many frames
   bool fuse_carried = false;   // fuse the carried fills too (they repeat earlier keyframes')
   bool drop_when_busy = true;  // live input; recorded input waits (set by the pipeline)
+  // After each frame, render the first variant's model at that frame's pose for frame-to-model
+  // tracking (Prediction()).
+  bool predict = false;
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -64,6 +69,10 @@ class FusionStage {
   void Finish(const std::function<bool()>& poll = {});
   void Cancel();
   int frames_fused() const { return frames_fused_; }
+  // The model's depth at the pose of the frames_fused()-th frame, once at least `frames` frames
+  // are fused (waits up to `timeout`); false when none is ready in time or the stage stopped.
+  bool Prediction(int frames, std::chrono::milliseconds timeout, cv::Mat* depth,
+                  SE3* world_from_camera);
   // report.json's "surfels" for variant `index`.
   nlohmann::ordered_json Report(size_t index = 0) const;
 
@@ -94,6 +103,12 @@ class FusionStage {
   std::atomic<int> frames_fused_{0};
   std::atomic<int> dropped_{0};
   std::atomic<bool> cancelled_{false};
+  std::mutex prediction_mutex_;
+  std::condition_variable prediction_ready_;
+  int prediction_frames_ = 0;
+  bool prediction_closed_ = false;
+  cv::Mat prediction_depth_;
+  SE3 prediction_pose_;
   StageThread worker_;
 };
 

@@ -35,7 +35,8 @@ json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
                      {"first_frame", options.first_frame},
                      {"end_frame", options.end_frame}};
   report["config"] = {
-      {"tracker", "frame_to_keyframe_icp"},
+      {"tracker", options.frame_to_model && options.fusion ? "frame_to_keyframe_then_model_icp"
+                                                           : "frame_to_keyframe_icp"},
       {"stereo_fill", options.fill},
       {"surfel_fusion", options.fusion},
       {"threads", std::string("reader + tracker") + (options.fill ? " + stereo" : "") +
@@ -126,6 +127,7 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   if (options_.fusion) {
     FusionStageOptions fusion_options = options_.fusion_options;
     fusion_options.drop_when_busy = live;
+    fusion_options.predict = options_.frame_to_model;
     std::vector<FusionStage::Variant> variants{
         {options_.fill ? "with_fill" : "without_fill", options_.fill, sink}};
     if (without_fill) variants.push_back({"without_fill", false, without_fill});
@@ -141,7 +143,7 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   ReadStage reader(&source, options_.first_frame, options_.end_frame, &queue);
   TrackStage tracker(source, options_.tracker,
                      options_.camera_file.empty() ? source.Input() : options_.camera_file, &queue,
-                     fill.get(), fusion.get());
+                     fill.get(), fusion.get(), options_.frame_to_model);
   std::string stop_reason;
   // Progress and stop requests, from this thread; true once a stop was asked for.
   auto poll = [&] {

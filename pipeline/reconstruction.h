@@ -40,6 +40,9 @@ struct ReconstructionOptions {
   bool fill = true;  // stereo hole filling of keyframes
   FillStageOptions fill_options;
   bool fusion = true;  // the surfel map (map.ply)
+  // Track against the model (the surfel map rendered at the last pose) after the keyframe; needs
+  // fusion. Tracking then waits for each frame to be fused before the next.
+  bool frame_to_model = false;
   FusionStageOptions fusion_options;
   // The file an implausible depth scale is blamed on (the camera.json in use); "" = the input.
   std::string camera_file;

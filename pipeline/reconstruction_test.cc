@@ -138,9 +138,8 @@ TEST(Reconstruction, TracksAndFillsTheSyntheticGlassTable) {
     const Eigen::Vector3d p = world_from_run * surfel.position.cast<double>();
     const Eigen::Vector3d n = world_from_run.RotationMatrix() * surfel.normal.cast<double>();
     synth::Hit hit;
-    fill_errors.push_back(scene.Intersect(p + 0.05 * n, -n, 0.0, 0.1, false, &hit)
-                              ? std::abs(hit.t - 0.05)
-                              : 1.0);
+    fill_errors.push_back(
+        scene.Intersect(p + 0.05 * n, -n, 0.0, 0.1, false, &hit) ? std::abs(hit.t - 0.05) : 1.0);
   }
   std::sort(fill_errors.begin(), fill_errors.end());
   ASSERT_FALSE(fill_errors.empty());

@@ -61,13 +61,14 @@ void ReadStage::Run() {
 
 TrackStage::TrackStage(const FrameSource& source, const TrackerOptions& options,
                        const std::string& camera_file, BoundedQueue<FrameItem>* queue,
-                       FillStage* fill, FusionStage* fusion)
+                       FillStage* fill, FusionStage* fusion, bool frame_to_model)
     : source_(source),
       options_(options),
       camera_file_(camera_file),
       queue_(queue),
       fill_(fill),
-      fusion_(fusion) {
+      fusion_(fusion),
+      frame_to_model_(frame_to_model && fusion != nullptr) {
   thread_.Start([this] { Run(); });
 }
 
@@ -85,6 +86,14 @@ void TrackStage::Run() {
     if (item.error) std::rethrow_exception(item.error);
     CheckDepthScale(item.frame);
     record_.read_ms.push_back(item.read_ms);
+    if (frame_to_model_ && offered_to_fusion_ > 0) {
+      // The model of every frame so far, seen from the last one's pose. A model that does not
+      // arrive in time (the fusion stage dropped frames, live) leaves this frame to its keyframe.
+      cv::Mat depth;
+      SE3 pose;
+      if (fusion_->Prediction(offered_to_fusion_, std::chrono::seconds(2), &depth, &pose))
+        tracker.SetModelReference(depth, pose);
+    }
     Track(item.frame, &tracker);
     record_.keyframes = tracker.keyframes();
     ++frames_;
@@ -107,8 +116,10 @@ void TrackStage::Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker) 
     fill_->Offer(frame, r.world_from_camera);
   }
   // Lost frames have no pose to fuse with.
-  if (fusion_ && r.status != TrackingStatus::kLost)
+  if (fusion_ && r.status != TrackingStatus::kLost) {
     fusion_->OfferFrame(frame, r.world_from_camera, tracker->keyframes() - 1);
+    ++offered_to_fusion_;
+  }
   record_.trajectory.push_back({frame.timestamp, frame.timestamp_text, r.world_from_camera});
   ++record_.frames;
 }

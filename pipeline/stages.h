@@ -62,9 +62,11 @@ class TrackStage {
  public:
   // `queue`, `fill` and `fusion` (either may be null: no fill, no map) must outlive the stage.
   // camera_file is the file an implausible depth scale is blamed on (the camera.json in use).
+  // With frame_to_model, each frame is first tracked as usual, then refined against the fusion
+  // stage's model of the frames before it (FrameToKeyframeTracker::SetModelReference).
   TrackStage(const FrameSource& source, const TrackerOptions& options,
              const std::string& camera_file, BoundedQueue<FrameItem>* queue, FillStage* fill,
-             FusionStage* fusion);
+             FusionStage* fusion, bool frame_to_model = false);
   ~TrackStage();
   void Stop();
   // True once tracking has ended (waits at most `timeout`).
@@ -88,8 +90,10 @@ class TrackStage {
   BoundedQueue<FrameItem>* queue_;
   FillStage* fill_;
   FusionStage* fusion_;
+  bool frame_to_model_;
   std::atomic<bool> stop_{false};
   std::atomic<int> frames_{0};
+  int offered_to_fusion_ = 0;  // frames handed to the fusion stage
   TrackingRecord record_;
   StageThread thread_;
 };

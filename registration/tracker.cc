@@ -79,8 +79,18 @@ FrameToKeyframeTracker::Features FrameToKeyframeTracker::ExtractFeatures(
   return f;
 }
 
+void FrameToKeyframeTracker::SetModelReference(const cv::Mat& depth,
+                                               const SE3& world_from_reference) {
+  GF_CHECK(depth.type() == CV_32FC1 && depth.cols == camera_.width && depth.rows == camera_.height,
+           "the model's depth must be CV_32F of the camera's size");
+  model_ = BuildDepthPyramid(depth, camera_, options_.pyramid_levels);
+  world_from_model_ = world_from_reference;
+}
+
 TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& frame) {
   TrackingResult result;
+  const DepthPyramid model = std::move(model_);  // for this frame only
+  model_ = DepthPyramid();
   DepthPyramid current = BuildDepthPyramid(frame.depth, camera_, options_.pyramid_levels);
   Features features = ExtractFeatures(frame);
   if (!initialized_) {
@@ -145,8 +155,20 @@ TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& frame) {
     return result;
   }
   result.status = TrackingStatus::kTracking;
-  const SE3 keyframe_from_current = result.icp.reference_from_current;
+  SE3 keyframe_from_current = result.icp.reference_from_current;
   result.world_from_camera = world_from_keyframe_ * keyframe_from_current;
+  if (!model.depth.empty()) {
+    // Refine against the model, which has fused every earlier frame (less drift than one keyframe).
+    const SE3 model_from_current = world_from_model_.Inverse() * result.world_from_camera;
+    const IcpSummary refined = AlignPointToPlane(model, current, model_from_current, options_.icp);
+    const SE3 step = model_from_current.Inverse() * refined.reference_from_current;
+    if (refined.success && step.TranslationNorm() <= options_.max_jump_m &&
+        step.RotationAngle() * 180.0 / M_PI <= options_.max_jump_deg) {
+      result.world_from_camera = world_from_model_ * refined.reference_from_current;
+      keyframe_from_current = world_from_keyframe_.Inverse() * result.world_from_camera;
+      result.model_refined = true;
+    }
+  }
   velocity_ = world_from_previous_.Inverse() * result.world_from_camera;
   world_from_previous_ = result.world_from_camera;
   const KeyframePolicy& k = options_.keyframes;

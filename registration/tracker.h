@@ -60,6 +60,7 @@ enum class TrackingStatus { kInitialized, kTracking, kLost };
 const char* TrackingStatusName(TrackingStatus status);
 
 struct TrackingResult {
+  bool model_refined = false;  // the pose was refined against the model (SetModelReference)
   TrackingStatus status = TrackingStatus::kInitialized;
   SE3 world_from_camera;
   bool new_keyframe = false;
@@ -82,6 +83,13 @@ class FrameToKeyframeTracker : public Tracker {
   FrameToKeyframeTracker(const Camera& camera, const TrackerOptions& options);
   TrackingResult Track(const RgbdFrame& frame) override;
   int keyframes() const { return keyframes_; }
+  // Frame-to-model tracking (KinectFusion, ElasticFusion): the next Track() first aligns the frame
+  // to its keyframe as usual, then refines the pose by point-to-plane ICP against `depth`, the
+  // model's depth rendered at world_from_reference (CV_32F metres on this camera's pixels, 0 =
+  // none; the surfel map seen from the last pose). The refinement is kept only when ICP succeeds
+  // on enough of the model and moves the pose by less than the jump limits. Keyframes (for the
+  // stereo fill) are chosen as before.
+  void SetModelReference(const cv::Mat& depth, const SE3& world_from_reference);
 
  private:
   // SURF keypoints of a frame with the 3D point under each (NaN where depth is missing).
@@ -101,6 +109,8 @@ class FrameToKeyframeTracker : public Tracker {
   SE3 world_from_previous_;
   SE3 velocity_;  // previous_from_current of the last step
   int keyframes_ = 0;
+  DepthPyramid model_;  // the model's depth at world_from_model_ (empty: none for the next frame)
+  SE3 world_from_model_;
 };
 
 }  // namespace gf

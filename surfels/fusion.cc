@@ -483,6 +483,45 @@ size_t SurfelFusion::MemoryBytes() const {
          chunks_.capacity() * sizeof(Chunk);
 }
 
+cv::Mat SurfelFusion::RenderDepth(const SE3& world_from_camera) {
+  const SE3 camera_from_world = world_from_camera.Inverse();
+  cv::Mat depth = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1);
+  chunks_.resize((map_.size() + kChunk - 1) / kChunk);
+  const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
+  const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
+  const float focal = static_cast<float>(0.5 * (camera_.fx + camera_.fy));
+  constexpr int kMaxSplat = 4;  // pixels
+  for (size_t c = 0; c < chunks_.size(); ++c) {
+    if (!ChunkVisible(c, camera_from_world)) continue;
+    const size_t end = std::min(map_.size(), (c + 1) * kChunk);
+    for (size_t i = c * kChunk; i < end; ++i) {
+      const Surfel& s = map_[i];
+      if (!IsStable(s)) continue;
+      const Eigen::Vector3f q = r * s.position + t, n = r * s.normal;
+      if (q.z() < options_.min_depth_m) continue;
+      const float n_dot_q = n.dot(q);
+      const Eigen::Vector2d uv = camera_.ProjectDistorted(q.cast<double>());
+      if (!(uv.x() >= -0.5 && uv.y() >= -0.5)) continue;
+      const int x0 = static_cast<int>(uv.x() + 0.5), y0 = static_cast<int>(uv.y() + 0.5);
+      const int radius = std::min(kMaxSplat, static_cast<int>(s.radius * focal / q.z()));
+      for (int y = std::max(0, y0 - radius); y <= std::min(camera_.height - 1, y0 + radius); ++y)
+        for (int x = std::max(0, x0 - radius); x <= std::min(camera_.width - 1, x0 + radius); ++x) {
+          // Where the pixel's ray meets the surfel's disc (an oriented splat: a disc drawn at
+          // one depth would bias slanted surfaces towards the camera, nearest first).
+          const cv::Vec2f& ray = rays_.at<cv::Vec2f>(y, x);
+          const Eigen::Vector3f dir(ray[0], ray[1], 1.f);
+          const float along = n.dot(dir);
+          if (std::abs(along) < 1e-3f) continue;
+          const float z = n_dot_q / along;
+          if (!(z > 0) || (dir * z - q).squaredNorm() > s.radius * s.radius) continue;
+          float& d = depth.at<float>(y, x);
+          if (d == 0.f || z < d) d = z;
+        }
+    }
+  }
+  return depth;
+}
+
 void SurfelFusion::AddSurfels(const std::vector<Surfel>& surfels) {
   for (const Surfel& s : surfels) map_.Add(s);
   chunks_.assign((map_.size() + kChunk - 1) / kChunk, Chunk());

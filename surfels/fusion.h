@@ -112,6 +112,9 @@ class SurfelFusion {
   int frames() const { return frame_; }
   // Bytes the map holds (capacity), for the memory figures.
   size_t MemoryBytes() const;
+  // The stable surfels' depth seen from world_from_camera (CV_32F metres, 0 = none): discs of their
+  // radius, nearest first; what frame-to-model tracking aligns the next frame to.
+  cv::Mat RenderDepth(const SE3& world_from_camera);
   // Adds surfels as they are (a map read back, or copies for a benchmark of a large map).
   void AddSurfels(const std::vector<Surfel>& surfels);
 
