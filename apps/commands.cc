@@ -98,6 +98,8 @@ void RegisterCommands(CLI::App& app) {
     cmd->add_flag("--no-fill", *no_fill, "no stereo hole filling of keyframes (sensor depth only)");
     auto no_fusion = std::make_shared<bool>(false);
     cmd->add_flag("--no-fusion", *no_fusion, "no surfel map (map.ply)");
+    cmd->add_flag("--mesh", options->mesh,
+                  "also mesh.ply: a triangle mesh of the map (PCL greedy projection)");
     cmd->add_flag("--frame-to-model", options->pipeline.frame_to_model,
                   "refine each frame's pose against the surfel map of the frames before it "
                   "(after aligning it to its keyframe)");

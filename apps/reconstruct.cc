@@ -1,5 +1,7 @@
 #include "apps/reconstruct.h"
 
+#include <spdlog/spdlog.h>
+
 #include <charconv>
 #include <filesystem>
 
@@ -7,6 +9,8 @@
 #include "apps/interrupt.h"
 #include "apps/progress.h"
 #include "pipeline/run_sink.h"
+#include "surfels/mesh.h"
+#include "surfels/ply.h"
 
 namespace fs = std::filesystem;
 
@@ -76,7 +80,14 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
   // The input first: a bad input leaves no run folder behind.
   std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, options.source);
   FolderRunSink sink(options.out_dir, options.force);
-  return RunPipeline(options, source.get(), &sink, nullptr, "reconstruct");
+  ReconstructionSummary s = RunPipeline(options, source.get(), &sink, nullptr, "reconstruct");
+  if (options.mesh && options.pipeline.fusion) {
+    const MeshSummary m =
+        WriteMapMesh(ReadSurfelPly((fs::path(options.out_dir) / "map.ply").string()),
+                     (fs::path(options.out_dir) / "mesh.ply").string(), {});
+    spdlog::info("{}", m.BriefReport());
+  }
+  return s;
 }
 
 }  // namespace gf

@@ -26,6 +26,7 @@ struct ReconstructOptions {
   ReconstructionOptions pipeline;  // frames, tracker, fill
   bool force = false;              // --force: replace an earlier run in out_dir
   bool allow_lost = false;         // --allow-lost: accept a run that loses tracking on most frames
+  bool mesh = false;  // --mesh: also mesh.ply, a triangle mesh of the map (surfels/mesh.h)
   // Set (to the signal's number) by a signal handler to stop the run early; may be null.
   const std::atomic<int>* interrupt = nullptr;
   bool Check(std::string* message = nullptr) const;

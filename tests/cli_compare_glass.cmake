@@ -60,6 +60,16 @@ if(PYTHON)
     if(NOT rc EQUAL 0 OR NOT o3d STREQUAL "${count} True True")
       message(FATAL_ERROR "Open3D read '${o3d}' from map.ply, expected '${count} True True'")
     endif()
+    # reconstruct --mesh: mesh.ply, a triangle mesh Open3D reads.
+    execute_process(COMMAND "${GLASSFUSION}" reconstruct "${tmp}/scene" --out "${tmp}/mesh"
+                            --frames 0:10 --mesh RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
+    execute_process(COMMAND "${PYTHON}" -c
+                    "import sys, open3d; m = open3d.io.read_triangle_mesh(sys.argv[1]); print(len(m.triangles) > 1000)"
+                    "${tmp}/mesh/mesh.ply" OUTPUT_VARIABLE o3d_mesh)
+    string(STRIP "${o3d_mesh}" o3d_mesh)
+    if(NOT rc EQUAL 0 OR NOT o3d_mesh STREQUAL "True")
+      message(FATAL_ERROR "reconstruct --mesh (${rc}, ${err}): Open3D read '${o3d_mesh}'")
+    endif()
   else()
     message("python3-open3d not installed: map.ply not read back with Open3D")
   endif()
