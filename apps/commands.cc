@@ -43,300 +43,320 @@ void AddInputArgs(CLI::App* cmd, InputArgs* args) {
                   "Redwood: depth subfolder (default depth/, else depth_noisy/)");
 }
 
+void AddInfoCommand(CLI::App& app) {
+  auto args = std::make_shared<InputArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "info",
+      "print JSON about INPUT: source kind, frames, size, intrinsics, depth convention, "
+      "hole fraction");
+  AddInputArgs(cmd, args.get());
+  cmd->callback([args] {
+    TerminalProgress progress("info", std::nullopt);
+    const auto info =
+        InputInfo(args->input, args->ToOptions(), [&](int done, int) { progress.Update(done); });
+    progress.Finish();
+    for (const auto& w : info["warnings"])
+      std::fprintf(stderr, "warning: %s: %s\n", args->input.c_str(),
+                   w.get<std::string>().c_str());
+    std::cout << info.dump(2) << std::endl;
+  });
+}
+
+void AddSynthCommand(CLI::App& app) {
+  auto options = std::make_shared<synth::SynthOptions>();
+  auto out = std::make_shared<std::string>();
+  CLI::App* cmd = app.add_subcommand(
+      "synth", "render a synthetic Kinect v1 glass scene with ground truth into a TUM folder");
+  cmd->add_option("--scene", options->scene, "glass-table or shelf")->capture_default_str();
+  cmd->add_option("--frames", options->frames, "frames to render")->capture_default_str();
+  cmd->add_option("--seed", options->seed, "textures, trajectory and noise")
+      ->capture_default_str();
+  cmd->add_flag("--loop", options->loop, "trajectory comes back to its start");
+  cmd->add_option("--out", *out, "folder to create")->required();
+  cmd->callback([options, out] {
+    TerminalProgress progress("synth", options->frames);
+    const synth::SynthSummary s =
+        synth::GenerateDataset(*options, *out, [&](int done, int) { progress.Update(done); });
+    progress.Finish();
+    std::cout << "synth: " << s.BriefReport() << "; written to " << *out << std::endl;
+  });
+}
+
+void AddReconstructCommand(CLI::App& app) {
+  auto options = std::make_shared<ReconstructOptions>();
+  auto args = std::make_shared<InputArgs>();
+  auto range = std::make_shared<std::string>();
+  CLI::App* cmd = app.add_subcommand(
+      "reconstruct",
+      "track the camera through INPUT and fill keyframe depth holes by stereo; write "
+      "DIR/trajectory.txt, map.ply, keyframes/, camera.json and report.json");
+  AddInputArgs(cmd, args.get());
+  cmd->add_option("--out", options->out_dir, "run folder")->required();
+  cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
+  auto no_fill = std::make_shared<bool>(false);
+  cmd->add_flag("--no-fill", *no_fill, "no stereo hole filling of keyframes (sensor depth only)");
+  auto no_fusion = std::make_shared<bool>(false);
+  cmd->add_flag("--no-fusion", *no_fusion, "no surfel map (map.ply)");
+  cmd->add_flag("--mesh", options->mesh,
+                "also mesh.ply: a triangle mesh of the map (PCL greedy projection)");
+  cmd->add_flag("--frame-to-model", options->pipeline.frame_to_model,
+                "refine each frame's pose against the surfel map of the frames before it "
+                "(after aligning it to its keyframe)");
+  auto sweep_all = std::make_shared<bool>(false);
+  cmd->add_flag("--sweep-all", *sweep_all,
+                "plane-sweep every keyframe pair (default: rectified SGBM for sideways pairs, "
+                "then the sweep over the holes it left; the sweep alone for forward ones)");
+  cmd->add_option("--config", options->config_file,
+                  "JSON file of tracker and fill settings (the tree report.json lists under "
+                  "config.settings; any part of it)");
+  cmd->add_flag("--force", options->force,
+                "replace the earlier run in --out (without it, a folder that is not empty is "
+                "refused)");
+  cmd->add_flag("--allow-lost", options->allow_lost,
+                "accept a run that loses tracking on most frames (exit 0 with a warning)");
+  cmd->callback([options, args, range, no_fill, no_fusion, sweep_all] {
+    if (!options->config_file.empty()) ApplyConfigFile(options->config_file, &options->pipeline);
+    if (*sweep_all) options->pipeline.fill_options.stereo.plane_sweep_always = true;
+    options->pipeline.fill = !*no_fill;
+    options->pipeline.fusion = !*no_fusion;
+    options->input = args->input;
+    options->source = args->ToOptions();
+    options->source.load_color = options->pipeline.tracker.use_features || options->pipeline.fill;
+    if (!range->empty())
+      ParseFrameRange(*range, &options->pipeline.first_frame, &options->pipeline.end_frame);
+    const InterruptHandler interrupt;  // Ctrl-C: stop, write the partial run, exit 130
+    options->interrupt = interrupt.signal();
+    const ReconstructionSummary s = RunReconstruct(*options);
+    for (const std::string& w : s.warnings)
+      std::fprintf(stderr, "warning: %s: %s\n", options->input.c_str(), w.c_str());
+    std::cout << "reconstruct: " << s.BriefReport() << "; outputs in " << options->out_dir
+              << std::endl;
+  });
+}
+
+void AddCompareCommand(CLI::App& app) {
+  auto options = std::make_shared<ReconstructOptions>();
+  auto args = std::make_shared<InputArgs>();
+  auto range = std::make_shared<std::string>();
+  CLI::App* cmd = app.add_subcommand(
+      "compare",
+      "track INPUT once and fuse it twice, with and without the stereo fill; write "
+      "DIR/with_fill/, DIR/without_fill/ (run folders with map.ply), DIR/compare.json and "
+      "DIR/report.html (completeness per material where INPUT has ground truth)");
+  AddInputArgs(cmd, args.get());
+  cmd->add_option("--out", options->out_dir, "comparison folder")->required();
+  cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
+  cmd->add_option("--config", options->config_file, "JSON file of settings, as for reconstruct");
+  cmd->add_flag("--force", options->force, "replace an earlier comparison in --out");
+  cmd->add_flag("--allow-lost", options->allow_lost,
+                "accept a run that loses tracking on most frames");
+  cmd->callback([options, args, range] {
+    if (!options->config_file.empty()) ApplyConfigFile(options->config_file, &options->pipeline);
+    options->input = args->input;
+    options->source = args->ToOptions();
+    if (!range->empty())
+      ParseFrameRange(*range, &options->pipeline.first_frame, &options->pipeline.end_frame);
+    const InterruptHandler interrupt;
+    options->interrupt = interrupt.signal();
+    const CompareSummary s = RunCompare(*options);
+    std::cout << "compare: " << s.BriefReport() << "; " << options->out_dir << "/report.html"
+              << std::endl;
+  });
+}
+
+void AddBenchCommand(CLI::App& app) {
+  auto options = std::make_shared<BenchOptions>();
+  auto args = std::make_shared<InputArgs>();
+  auto range = std::make_shared<std::string>();
+  auto no_peers = std::make_shared<bool>(false);
+  CLI::App* cmd = app.add_subcommand(
+      "bench", "time GlassFusion's tracker and OpenCV's odometry peers on the same frames");
+  AddInputArgs(cmd, args.get());
+  cmd->add_option("--frames", *range, "frame range A:B");
+  cmd->add_option("--gt", options->gt, "ground truth (default: INPUT/groundtruth.txt or .log)");
+  cmd->add_flag("--no-peers", *no_peers, "time GlassFusion only");
+  cmd->add_option(
+      "--fill-every", options->fill_every,
+      "also time stereo hole filling on one core, every K-th frame a keyframe, paired "
+      "and filled as reconstruct does with the tracked poses (0: off)");
+  cmd->add_flag("--frame-to-model", options->frame_to_model,
+                "also our tracker refined against the surfel map of the frames before each one");
+  cmd->add_flag("--fusion", options->fusion,
+                "also time the surfel fusion per frame on one core and on two, and with a map "
+                "of about a million surfels");
+  auto config = std::make_shared<std::string>();
+  cmd->add_option("--config", *config,
+                  "JSON file of tracker and fill settings, as for reconstruct");
+  cmd->callback([options, args, range, no_peers, config] {
+    if (!config->empty()) ApplyConfigFile(*config, &options->pipeline);
+    options->input = args->input;
+    options->source = args->ToOptions();
+    options->peers = !*no_peers;
+    if (!range->empty()) ParseFrameRange(*range, &options->first_frame, &options->end_frame);
+    const auto j = RunBench(*options);
+    std::printf("%-36s %8s %8s %10s %8s\n", "method", "ms", "fps", "ATE (cm)", "failed");
+    for (const auto& m : j["methods"]) {
+      const bool has_ate = m.contains("ate_rmse_m") && !m["ate_rmse_m"].is_null();
+      std::printf("%-36s %8.1f %8.1f %10s %8d\n", m["method"].get<std::string>().c_str(),
+                  m["median_ms"].get<double>(), m["fps"].get<double>(),
+                  has_ate
+                      ? std::to_string(100.0 * m["ate_rmse_m"].get<double>()).substr(0, 6).c_str()
+                      : "-",
+                  m["failed_frames"].get<int>());
+    }
+    if (j.contains("stereo_fill") && j["stereo_fill"]["pairs"].get<int>() > 0) {
+      const auto& f = j["stereo_fill"];
+      std::printf(
+          "stereo fill, one core: %d pairs, median %.1f ms/pair (max %.1f) after "
+          "%.1f ms pair selection, then %.1f ms carrying earlier keyframes' fills, %.1f%% of "
+          "hole pixels filled (%.1f%% with the carried fills); OpenCV StereoSGBM "
+          "alone: %s ms on %d sideways pairs\n",
+          f["pairs"].get<int>(), f["median_ms"].get<double>(), f["max_ms"].get<double>(),
+          f["pair_selection_median_ms"].get<double>(), f["carry_median_ms"].get<double>(),
+          100.0 * f["fill_rate"].get<double>(), 100.0 * f["fill_rate_with_carry"].get<double>(),
+          f["opencv_sgbm_median_ms"].is_null()
+              ? "-"
+              : std::to_string(f["opencv_sgbm_median_ms"].get<double>()).substr(0, 6).c_str(),
+          f["opencv_sgbm_pairs"].get<int>());
+    }
+    std::printf("%d frames, %u cores\n", j["frames"].get<int>(), j["cores"].get<unsigned>());
+    std::cout << j.dump(2) << std::endl;
+  });
+}
+
+void AddEvalCommand(CLI::App& app) {
+  auto gt = std::make_shared<std::string>();
+  auto est = std::make_shared<std::string>();
+  auto options = std::make_shared<TrajectoryErrorOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "eval", "trajectory error of --est against --gt as JSON (ATE after rigid alignment, RPE)");
+  cmd->add_option("--gt", *gt, "ground truth: TUM text or Redwood .log")->required();
+  cmd->add_option("--est", *est, "estimate: TUM text or Redwood .log")->required();
+  cmd->add_option("--max-dt", options->max_dt, "association window, seconds")
+      ->capture_default_str();
+  auto map = std::make_shared<std::string>();
+  auto mesh = std::make_shared<std::string>();
+  cmd->add_option("--map", *map, "map.ply of the run whose trajectory --est is");
+  cmd->add_option("--gt-mesh", *mesh,
+                  "ground-truth mesh (a synthetic capture's scene.ply): the map's accuracy and "
+                  "completeness, overall and per material");
+  cmd->callback([gt, est, options, map, mesh] {
+    if (map->empty() != mesh->empty()) throw InputError("--map", "needs --gt-mesh too");
+    std::string problem;
+    if (!options->Check(&problem)) throw InputError("--max-dt", problem);
+    const TrajectoryErrorSummary s =
+        EvaluateTrajectory(ReadTrajectory(*gt), ReadTrajectory(*est), *options);
+    if (!s.success) throw InputError(*est, s.message + " with " + *gt);
+    nlohmann::ordered_json j;
+    j["gt"] = *gt;
+    j["est"] = *est;
+    j["pairs"] = s.pairs;
+    j["ate_rmse_m"] = s.ate_rmse_m;
+    j["ate_mean_m"] = s.ate_mean_m;
+    j["ate_median_m"] = s.ate_median_m;
+    j["ate_max_m"] = s.ate_max_m;
+    j["rpe_trans_rmse_m"] = s.rpe_trans_rmse_m;
+    j["rpe_rot_rmse_deg"] = s.rpe_rot_rmse_deg;
+    // The rigid alignment fits 6 parameters to 3 coordinates per pose: with few poses it
+    // absorbs much of the error (a fifth with 10, half with 4), and the ATE looks too good.
+    constexpr int kFewPairs = 10;
+    nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
+    if (s.pairs < kFewPairs) {
+      warnings.push_back("only " + std::to_string(s.pairs) +
+                         " poses associated: the ATE after alignment is not meaningful with "
+                         "fewer than " +
+                         std::to_string(kFewPairs));
+      std::fprintf(stderr, "warning: %s: %s\n", est->c_str(),
+                   warnings.back().get<std::string>().c_str());
+    }
+    j["warnings"] = warnings;
+    if (!map->empty()) {
+      const nlohmann::ordered_json m =
+          EvaluateMapFiles(*map, *mesh, ReadTrajectory(*gt), ReadTrajectory(*est));
+      j["map"] = *map;
+      j["completeness"] = m["completeness"];
+      j["accuracy"] = m["accuracy"];
+    }
+    std::cout << j.dump(2) << std::endl;
+  });
+}
+
+void AddCaptureCommand(CLI::App& app) {
+  auto options = std::make_shared<CaptureOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "capture", "record a device (or .oni file) to a TUM-format folder for offline processing");
+  cmd->add_option(
+         "--device", options->device,
+         "dummy (OpenNI2's software device), openni2[:URI], freenect[:INDEX], or FILE.oni")
+      ->required();
+  cmd->add_option("--out", options->out_dir, "TUM folder to create")->required();
+  cmd->add_option("--frames", options->frames, "frames to record (0 = until the end or Ctrl-C)")
+      ->capture_default_str();
+  cmd->add_option("--camera", options->camera_file, "camera.json to use instead of the device's");
+  cmd->callback([options] { RunCapture(*options); });
+}
+
+void AddColmapExportCommand(CLI::App& app) {
+  auto run_dir = std::make_shared<std::string>();
+  auto workspace = std::make_shared<std::string>();
+  CLI::App* cmd = app.add_subcommand(
+      "colmap-export",
+      "write a COLMAP workspace (images/, sparse/ text model with the tracked keyframe poses) "
+      "from a reconstruct run");
+  cmd->add_option("RUN_DIR", *run_dir, "folder written by `glassfusion reconstruct`")->required();
+  cmd->add_option("--out", *workspace, "workspace folder to create")->required();
+  cmd->callback([run_dir, workspace] {
+    const ColmapExportSummary s = RunColmapExport(*run_dir, *workspace);
+    std::cout << "colmap-export: " << s.BriefReport() << " in " << *workspace << std::endl;
+  });
+}
+
+void AddColmapImportCommand(CLI::App& app) {
+  auto workspace = std::make_shared<std::string>();
+  auto run_dir = std::make_shared<std::string>();
+  auto options = std::make_shared<ColmapImportOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "colmap-import",
+      "read COLMAP's refined poses (text model) and patch_match_stereo depth maps back into a "
+      "run: RUN_DIR/trajectory_colmap.txt, holes filled in keyframes/, colmap_import.json");
+  cmd->add_option("WORKSPACE", *workspace, "COLMAP workspace made by colmap-export")->required();
+  cmd->add_option("--into", *run_dir, "the reconstruct run folder")->required();
+  cmd->add_option("--model", options->model_dir,
+                  "text model with refined poses (default WORKSPACE/refined)");
+  cmd->callback([workspace, run_dir, options] {
+    const ColmapImportSummary s = RunColmapImport(*workspace, *run_dir, *options);
+    std::cout << "colmap-import: " << s.BriefReport() << std::endl;
+  });
+}
+
+void AddDemoCommand(CLI::App& app) {
+  auto options = std::make_shared<DemoOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "demo", "generate the built-in glass scene, measure its holes, write OUT/report.html");
+  cmd->add_option("--out", options->out_dir, "output folder")->capture_default_str();
+  cmd->add_option("--frames", options->frames, "frames of the glass scene")
+      ->capture_default_str();
+  cmd->add_option("--data", options->data_dir,
+                  "folder of datasets to summarise too (default ../shared/datasets if present)");
+  cmd->add_option("--config", options->config_file,
+                  "JSON file of tracker and fill settings for the reconstruction, as for "
+                  "reconstruct");
+  cmd->callback([options] { RunDemo(*options); });
+}
+
 }  // namespace
 
 void RegisterCommands(CLI::App& app) {
-  {
-    auto args = std::make_shared<InputArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "info",
-        "print JSON about INPUT: source kind, frames, size, intrinsics, depth convention, "
-        "hole fraction");
-    AddInputArgs(cmd, args.get());
-    cmd->callback([args] {
-      TerminalProgress progress("info", std::nullopt);
-      const auto info =
-          InputInfo(args->input, args->ToOptions(), [&](int done, int) { progress.Update(done); });
-      progress.Finish();
-      for (const auto& w : info["warnings"])
-        std::fprintf(stderr, "warning: %s: %s\n", args->input.c_str(),
-                     w.get<std::string>().c_str());
-      std::cout << info.dump(2) << std::endl;
-    });
-  }
-  {
-    auto options = std::make_shared<synth::SynthOptions>();
-    auto out = std::make_shared<std::string>();
-    CLI::App* cmd = app.add_subcommand(
-        "synth", "render a synthetic Kinect v1 glass scene with ground truth into a TUM folder");
-    cmd->add_option("--scene", options->scene, "glass-table or shelf")->capture_default_str();
-    cmd->add_option("--frames", options->frames, "frames to render")->capture_default_str();
-    cmd->add_option("--seed", options->seed, "textures, trajectory and noise")
-        ->capture_default_str();
-    cmd->add_flag("--loop", options->loop, "trajectory comes back to its start");
-    cmd->add_option("--out", *out, "folder to create")->required();
-    cmd->callback([options, out] {
-      TerminalProgress progress("synth", options->frames);
-      const synth::SynthSummary s =
-          synth::GenerateDataset(*options, *out, [&](int done, int) { progress.Update(done); });
-      progress.Finish();
-      std::cout << "synth: " << s.BriefReport() << "; written to " << *out << std::endl;
-    });
-  }
-  {
-    auto options = std::make_shared<ReconstructOptions>();
-    auto args = std::make_shared<InputArgs>();
-    auto range = std::make_shared<std::string>();
-    CLI::App* cmd = app.add_subcommand(
-        "reconstruct",
-        "track the camera through INPUT and fill keyframe depth holes by stereo; write "
-        "DIR/trajectory.txt, keyframes/, camera.json and report.json");
-    AddInputArgs(cmd, args.get());
-    cmd->add_option("--out", options->out_dir, "run folder")->required();
-    cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
-    auto no_fill = std::make_shared<bool>(false);
-    cmd->add_flag("--no-fill", *no_fill, "no stereo hole filling of keyframes (sensor depth only)");
-    auto no_fusion = std::make_shared<bool>(false);
-    cmd->add_flag("--no-fusion", *no_fusion, "no surfel map (map.ply)");
-    cmd->add_flag("--mesh", options->mesh,
-                  "also mesh.ply: a triangle mesh of the map (PCL greedy projection)");
-    cmd->add_flag("--frame-to-model", options->pipeline.frame_to_model,
-                  "refine each frame's pose against the surfel map of the frames before it "
-                  "(after aligning it to its keyframe)");
-    auto sweep_all = std::make_shared<bool>(false);
-    cmd->add_flag("--sweep-all", *sweep_all,
-                  "plane-sweep every keyframe pair (default: rectified SGBM for sideways pairs, "
-                  "then the sweep over the holes it left; the sweep alone for forward ones)");
-    cmd->add_option("--config", options->config_file,
-                    "JSON file of tracker and fill settings (the tree report.json lists under "
-                    "config.settings; any part of it)");
-    cmd->add_flag("--force", options->force,
-                  "replace the earlier run in --out (without it, a folder that is not empty is "
-                  "refused)");
-    cmd->add_flag("--allow-lost", options->allow_lost,
-                  "accept a run that loses tracking on most frames (exit 0 with a warning)");
-    cmd->callback([options, args, range, no_fill, no_fusion, sweep_all] {
-      if (!options->config_file.empty()) ApplyConfigFile(options->config_file, &options->pipeline);
-      if (*sweep_all) options->pipeline.fill_options.stereo.plane_sweep_always = true;
-      options->pipeline.fill = !*no_fill;
-      options->pipeline.fusion = !*no_fusion;
-      options->input = args->input;
-      options->source = args->ToOptions();
-      options->source.load_color = options->pipeline.tracker.use_features || options->pipeline.fill;
-      if (!range->empty())
-        ParseFrameRange(*range, &options->pipeline.first_frame, &options->pipeline.end_frame);
-      const InterruptHandler interrupt;  // Ctrl-C: stop, write the partial run, exit 130
-      options->interrupt = interrupt.signal();
-      const ReconstructionSummary s = RunReconstruct(*options);
-      for (const std::string& w : s.warnings)
-        std::fprintf(stderr, "warning: %s: %s\n", options->input.c_str(), w.c_str());
-      std::cout << "reconstruct: " << s.BriefReport() << "; outputs in " << options->out_dir
-                << std::endl;
-    });
-  }
-  {
-    auto options = std::make_shared<ReconstructOptions>();
-    auto args = std::make_shared<InputArgs>();
-    auto range = std::make_shared<std::string>();
-    CLI::App* cmd = app.add_subcommand(
-        "compare",
-        "track INPUT once and fuse it twice, with and without the stereo fill; write "
-        "DIR/with_fill/, DIR/without_fill/ (run folders with map.ply), DIR/compare.json and "
-        "DIR/report.html (completeness per material where INPUT has ground truth)");
-    AddInputArgs(cmd, args.get());
-    cmd->add_option("--out", options->out_dir, "comparison folder")->required();
-    cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
-    cmd->add_option("--config", options->config_file, "JSON file of settings, as for reconstruct");
-    cmd->add_flag("--force", options->force, "replace an earlier comparison in --out");
-    cmd->add_flag("--allow-lost", options->allow_lost,
-                  "accept a run that loses tracking on most frames");
-    cmd->callback([options, args, range] {
-      if (!options->config_file.empty()) ApplyConfigFile(options->config_file, &options->pipeline);
-      options->input = args->input;
-      options->source = args->ToOptions();
-      if (!range->empty())
-        ParseFrameRange(*range, &options->pipeline.first_frame, &options->pipeline.end_frame);
-      const InterruptHandler interrupt;
-      options->interrupt = interrupt.signal();
-      const CompareSummary s = RunCompare(*options);
-      std::cout << "compare: " << s.BriefReport() << "; " << options->out_dir << "/report.html"
-                << std::endl;
-    });
-  }
-  {
-    auto options = std::make_shared<BenchOptions>();
-    auto args = std::make_shared<InputArgs>();
-    auto range = std::make_shared<std::string>();
-    auto no_peers = std::make_shared<bool>(false);
-    CLI::App* cmd = app.add_subcommand(
-        "bench", "time GlassFusion's tracker and OpenCV's odometry peers on the same frames");
-    AddInputArgs(cmd, args.get());
-    cmd->add_option("--frames", *range, "frame range A:B");
-    cmd->add_option("--gt", options->gt, "ground truth (default: INPUT/groundtruth.txt or .log)");
-    cmd->add_flag("--no-peers", *no_peers, "time GlassFusion only");
-    cmd->add_option(
-        "--fill-every", options->fill_every,
-        "also time stereo hole filling on one core, every K-th frame a keyframe, paired "
-        "and filled as reconstruct does with the tracked poses (0: off)");
-    cmd->add_flag("--frame-to-model", options->frame_to_model,
-                  "also our tracker refined against the surfel map of the frames before each one");
-    cmd->add_flag("--fusion", options->fusion,
-                  "also time the surfel fusion per frame on one core and on two, and with a map "
-                  "of about a million surfels");
-    auto config = std::make_shared<std::string>();
-    cmd->add_option("--config", *config,
-                    "JSON file of tracker and fill settings, as for reconstruct");
-    cmd->callback([options, args, range, no_peers, config] {
-      if (!config->empty()) ApplyConfigFile(*config, &options->pipeline);
-      options->input = args->input;
-      options->source = args->ToOptions();
-      options->peers = !*no_peers;
-      if (!range->empty()) ParseFrameRange(*range, &options->first_frame, &options->end_frame);
-      const auto j = RunBench(*options);
-      std::printf("%-36s %8s %8s %10s %8s\n", "method", "ms", "fps", "ATE (cm)", "failed");
-      for (const auto& m : j["methods"]) {
-        const bool has_ate = m.contains("ate_rmse_m") && !m["ate_rmse_m"].is_null();
-        std::printf("%-36s %8.1f %8.1f %10s %8d\n", m["method"].get<std::string>().c_str(),
-                    m["median_ms"].get<double>(), m["fps"].get<double>(),
-                    has_ate
-                        ? std::to_string(100.0 * m["ate_rmse_m"].get<double>()).substr(0, 6).c_str()
-                        : "-",
-                    m["failed_frames"].get<int>());
-      }
-      if (j.contains("stereo_fill") && j["stereo_fill"]["pairs"].get<int>() > 0) {
-        const auto& f = j["stereo_fill"];
-        std::printf(
-            "stereo fill, one core: %d pairs, median %.1f ms/pair (max %.1f) after "
-            "%.1f ms pair selection, then %.1f ms carrying earlier keyframes' fills, %.1f%% of "
-            "hole pixels filled (%.1f%% with the carried fills); OpenCV StereoSGBM "
-            "alone: %s ms on %d sideways pairs\n",
-            f["pairs"].get<int>(), f["median_ms"].get<double>(), f["max_ms"].get<double>(),
-            f["pair_selection_median_ms"].get<double>(), f["carry_median_ms"].get<double>(),
-            100.0 * f["fill_rate"].get<double>(), 100.0 * f["fill_rate_with_carry"].get<double>(),
-            f["opencv_sgbm_median_ms"].is_null()
-                ? "-"
-                : std::to_string(f["opencv_sgbm_median_ms"].get<double>()).substr(0, 6).c_str(),
-            f["opencv_sgbm_pairs"].get<int>());
-      }
-      std::printf("%d frames, %u cores\n", j["frames"].get<int>(), j["cores"].get<unsigned>());
-      std::cout << j.dump(2) << std::endl;
-    });
-  }
-  {
-    auto gt = std::make_shared<std::string>();
-    auto est = std::make_shared<std::string>();
-    auto options = std::make_shared<TrajectoryErrorOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "eval", "trajectory error of --est against --gt as JSON (ATE after rigid alignment, RPE)");
-    cmd->add_option("--gt", *gt, "ground truth: TUM text or Redwood .log")->required();
-    cmd->add_option("--est", *est, "estimate: TUM text or Redwood .log")->required();
-    cmd->add_option("--max-dt", options->max_dt, "association window, seconds")
-        ->capture_default_str();
-    auto map = std::make_shared<std::string>();
-    auto mesh = std::make_shared<std::string>();
-    cmd->add_option("--map", *map, "map.ply of the run whose trajectory --est is");
-    cmd->add_option("--gt-mesh", *mesh,
-                    "ground-truth mesh (a synthetic capture's scene.ply): the map's accuracy and "
-                    "completeness, overall and per material");
-    cmd->callback([gt, est, options, map, mesh] {
-      if (map->empty() != mesh->empty()) throw InputError("--map", "needs --gt-mesh too");
-      std::string problem;
-      if (!options->Check(&problem)) throw InputError("--max-dt", problem);
-      const TrajectoryErrorSummary s =
-          EvaluateTrajectory(ReadTrajectory(*gt), ReadTrajectory(*est), *options);
-      if (!s.success) throw InputError(*est, s.message + " with " + *gt);
-      nlohmann::ordered_json j;
-      j["gt"] = *gt;
-      j["est"] = *est;
-      j["pairs"] = s.pairs;
-      j["ate_rmse_m"] = s.ate_rmse_m;
-      j["ate_mean_m"] = s.ate_mean_m;
-      j["ate_median_m"] = s.ate_median_m;
-      j["ate_max_m"] = s.ate_max_m;
-      j["rpe_trans_rmse_m"] = s.rpe_trans_rmse_m;
-      j["rpe_rot_rmse_deg"] = s.rpe_rot_rmse_deg;
-      // The rigid alignment fits 6 parameters to 3 coordinates per pose: with few poses it
-      // absorbs much of the error (a fifth with 10, half with 4), and the ATE looks too good.
-      constexpr int kFewPairs = 10;
-      nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
-      if (s.pairs < kFewPairs) {
-        warnings.push_back("only " + std::to_string(s.pairs) +
-                           " poses associated: the ATE after alignment is not meaningful with "
-                           "fewer than " +
-                           std::to_string(kFewPairs));
-        std::fprintf(stderr, "warning: %s: %s\n", est->c_str(),
-                     warnings.back().get<std::string>().c_str());
-      }
-      j["warnings"] = warnings;
-      if (!map->empty()) {
-        const nlohmann::ordered_json m =
-            EvaluateMapFiles(*map, *mesh, ReadTrajectory(*gt), ReadTrajectory(*est));
-        j["map"] = *map;
-        j["completeness"] = m["completeness"];
-        j["accuracy"] = m["accuracy"];
-      }
-      std::cout << j.dump(2) << std::endl;
-    });
-  }
-  {
-    auto options = std::make_shared<CaptureOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "capture", "record a device (or .oni file) to a TUM-format folder for offline processing");
-    cmd->add_option(
-           "--device", options->device,
-           "dummy (OpenNI2's software device), openni2[:URI], freenect[:INDEX], or FILE.oni")
-        ->required();
-    cmd->add_option("--out", options->out_dir, "TUM folder to create")->required();
-    cmd->add_option("--frames", options->frames, "frames to record (0 = until the end or Ctrl-C)")
-        ->capture_default_str();
-    cmd->add_option("--camera", options->camera_file, "camera.json to use instead of the device's");
-    cmd->callback([options] { RunCapture(*options); });
-  }
-  {
-    auto run_dir = std::make_shared<std::string>();
-    auto workspace = std::make_shared<std::string>();
-    CLI::App* cmd = app.add_subcommand(
-        "colmap-export",
-        "write a COLMAP workspace (images/, sparse/ text model with the tracked keyframe poses) "
-        "from a reconstruct run");
-    cmd->add_option("RUN_DIR", *run_dir, "folder written by `glassfusion reconstruct`")->required();
-    cmd->add_option("--out", *workspace, "workspace folder to create")->required();
-    cmd->callback([run_dir, workspace] {
-      const ColmapExportSummary s = RunColmapExport(*run_dir, *workspace);
-      std::cout << "colmap-export: " << s.BriefReport() << " in " << *workspace << std::endl;
-    });
-  }
-  {
-    auto workspace = std::make_shared<std::string>();
-    auto run_dir = std::make_shared<std::string>();
-    auto options = std::make_shared<ColmapImportOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "colmap-import",
-        "read COLMAP's refined poses (text model) and patch_match_stereo depth maps back into a "
-        "run: RUN_DIR/trajectory_colmap.txt, holes filled in keyframes/, colmap_import.json");
-    cmd->add_option("WORKSPACE", *workspace, "COLMAP workspace made by colmap-export")->required();
-    cmd->add_option("--into", *run_dir, "the reconstruct run folder")->required();
-    cmd->add_option("--model", options->model_dir,
-                    "text model with refined poses (default WORKSPACE/refined)");
-    cmd->callback([workspace, run_dir, options] {
-      const ColmapImportSummary s = RunColmapImport(*workspace, *run_dir, *options);
-      std::cout << "colmap-import: " << s.BriefReport() << std::endl;
-    });
-  }
-  {
-    auto options = std::make_shared<DemoOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "demo", "generate the built-in glass scene, measure its holes, write OUT/report.html");
-    cmd->add_option("--out", options->out_dir, "output folder")->capture_default_str();
-    cmd->add_option("--frames", options->frames, "frames of the glass scene")
-        ->capture_default_str();
-    cmd->add_option("--data", options->data_dir,
-                    "folder of datasets to summarise too (default ../shared/datasets if present)");
-    cmd->add_option("--config", options->config_file,
-                    "JSON file of tracker and fill settings for the reconstruction, as for "
-                    "reconstruct");
-    cmd->callback([options] { RunDemo(*options); });
-  }
+  AddInfoCommand(app);
+  AddSynthCommand(app);
+  AddReconstructCommand(app);
+  AddCompareCommand(app);
+  AddBenchCommand(app);
+  AddEvalCommand(app);
+  AddCaptureCommand(app);
+  AddColmapExportCommand(app);
+  AddColmapImportCommand(app);
+  AddDemoCommand(app);
 }
 
 }  // namespace gf

@@ -16,6 +16,7 @@
 #include "apps/info.h"
 #include "apps/progress.h"
 #include "apps/reconstruct.h"
+#include "apps/report_html.h"
 #include "datasets/synth.h"
 #include "pipeline/settings.h"
 
@@ -23,26 +24,6 @@ namespace fs = std::filesystem;
 
 namespace gf {
 namespace {
-
-std::string HtmlEscape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 std::string Percent(double f) {
   std::ostringstream s;
@@ -250,7 +231,7 @@ void RunDemo(const DemoOptions& options) {
     TerminalProgress progress("demo: " + fs::path(input).filename().string(), std::nullopt);
     report["datasets"].push_back(InputInfo(input, {}, [&](int d, int) { progress.Update(d); }));
   }
-  report["not_yet_built"] = {"loop closure", "surfel fusion", "completeness comparison"};
+  report["not_yet_built"] = {"loop closure"};
 
   std::ostringstream html;
   html << "<!doctype html><html><head><meta charset=\"utf-8\"><title>GlassFusion demo</title>"
@@ -299,8 +280,8 @@ void RunDemo(const DemoOptions& options) {
          << ": filled pixels green (cyan: carried from earlier keyframes; brighter = more "
             "confident), "
             "holes left empty magenta.</p><img src=\"fill_overlay.png\">";
-  html << "<p>Loop closure, surfel fusion and the with/without-fill comparison are not built yet; "
-          "the report grows with the pipeline.</p>";
+  html << "<p>The run's surfel map is <code>run/map.ply</code>; <code>glassfusion compare</code> "
+          "measures it with and without the fill. Loop closure is not built yet.</p>";
   if (!inputs.empty()) {
     html << "<h2>Datasets found under <code>" << HtmlEscape(data_dir) << "</code></h2>"
          << "<table><tr><th>input</th><th>kind</th><th>frames</th><th>size</th><th>depth</th>"

@@ -1,11 +1,9 @@
 #include "surfels/fusion.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <limits>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
@@ -15,18 +13,12 @@
 namespace gf {
 namespace {
 
-constexpr uint64_t kEmpty = std::numeric_limits<uint64_t>::max();
 constexpr double kDegToRad = M_PI / 180.0;
 
-// Packs a positive depth and a surfel index so that the smaller value is the nearer surfel.
-uint64_t Pack(float z, uint32_t index) {
-  uint32_t bits;
-  std::memcpy(&bits, &z, sizeof(bits));  // positive floats order as their bits do
-  return (static_cast<uint64_t>(bits) << 32) | index;
-}
+}  // namespace
 
 // One measured pixel after association.
-struct PixelResult {
+struct SurfelFusion::PixelResult {
   int match = -1;  // surfel index, -1 none
   bool valid = false;
   Eigen::Vector3f point, normal;  // camera frame
@@ -34,8 +26,6 @@ struct PixelResult {
   uint8_t red = 0, green = 0, blue = 0;
   DepthSource source = DepthSource::kSensor;
 };
-
-}  // namespace
 
 struct SurfelFusion::Measurement {
   const cv::Mat& depth;   // CV_32F metres
@@ -108,38 +98,6 @@ SurfelFusion::SurfelFusion(const Camera& camera, const FusionOptions& options)
     }
 }
 
-bool SurfelFusion::ChunkVisible(size_t c, const SE3& camera_from_world) {
-  Chunk& chunk = chunks_[c];
-  if (chunk.dirty) {
-    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-    Eigen::Vector3f hi = -lo;
-    float largest = 0;
-    const size_t end = std::min(map_.size(), (c + 1) * kChunk);
-    for (size_t i = c * kChunk; i < end; ++i) {
-      const Surfel& s = map_[i];
-      if (s.removed()) continue;
-      lo = lo.cwiseMin(s.position);
-      hi = hi.cwiseMax(s.position);
-      largest = std::max(largest, s.radius);
-    }
-    chunk.centre = 0.5f * (lo + hi);
-    chunk.radius = lo.x() > hi.x() ? -1.f : 0.5f * (hi - lo).norm() + largest;
-    chunk.dirty = false;
-  }
-  if (chunk.radius < 0) return false;  // all removed
-  const Eigen::Vector3f q = (camera_from_world * chunk.centre.cast<double>()).cast<float>();
-  const float r = chunk.radius;
-  if (q.z() + r < options_.min_depth_m * 0.5) return false;
-  // Outside one of the four planes through the camera centre and the image's edges.
-  // Signed distance of the centre beyond the plane a = slope * z (a: x or y, or their negatives).
-  auto beyond = [&](float a, float slope) {
-    return (a - slope * q.z()) / std::sqrt(1.f + slope * slope) > r;
-  };
-  if (beyond(q.x(), view_x_[1]) || beyond(-q.x(), -view_x_[0])) return false;
-  if (beyond(q.y(), view_y_[1]) || beyond(-q.y(), -view_y_[0])) return false;
-  return true;
-}
-
 FusionStats SurfelFusion::FuseFrame(const RgbdFrame& frame, const SE3& world_from_camera,
                                     int keyframe) {
   GF_CHECK(frame.depth.type() == CV_32FC1 && frame.depth.cols == camera_.width &&
@@ -165,179 +123,135 @@ FusionStats SurfelFusion::FuseFill(const RgbdFrame& frame, const cv::Mat& filled
                world_from_camera, keyframe, false, fills_ % options_.pixel_step});
 }
 
-void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
-  std::fill(index_map_.begin(), index_map_.end(), kEmpty);
-  chunks_.resize((map_.size() + kChunk - 1) / kChunk);
-  const int chunks = static_cast<int>(chunks_.size());
-  // The chunks in view, and where each one's entries start (entries: the surfels of the chunks
-  // in view, in map order; the per-surfel work of this step runs over them only).
-  std::vector<uint8_t> in_view(chunks);
-  cv::parallel_for_(cv::Range(0, chunks), [&](const cv::Range& range) {
-    for (int c = range.start; c < range.end; ++c) in_view[c] = ChunkVisible(c, camera_from_world);
-  });
-  std::vector<size_t> offset(chunks);
-  size_t entries = 0;
-  for (int c = 0; c < chunks; ++c) {
-    offset[c] = entries;
-    if (in_view[c]) entries += std::min(map_.size(), (c + 1) * kChunk) - c * kChunk;
-  }
-  visible_.resize(entries);
-  in_camera_.resize(entries);
-  normal_in_camera_.resize(entries);
-  pixel_of_.assign(entries, -1);
-  const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
-  const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
-  // Depth and entry packed into one 64-bit word, so that the nearest surfel per pixel is an atomic
-  // minimum (projection runs in parallel).
-  auto* cells = reinterpret_cast<std::atomic<uint64_t>*>(index_map_.data());
-  static_assert(sizeof(std::atomic<uint64_t>) == sizeof(uint64_t), "atomic words");
-  const int width = camera_.width, height = camera_.height;
-  // Camera::ProjectDistorted in float, inlined: this runs for every surfel in view.
-  const float fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
-  const float k1 = camera_.distortion[0], k2 = camera_.distortion[1], p1 = camera_.distortion[2],
-              p2 = camera_.distortion[3], k3 = camera_.distortion[4];
-  const float near = static_cast<float>(options_.min_depth_m * 0.5);
-  cv::parallel_for_(cv::Range(0, chunks), [&](const cv::Range& range) {
-    for (int c = range.start; c < range.end; ++c) {
-      if (!in_view[c]) continue;
-      const size_t first = c * kChunk, end = std::min(map_.size(), first + kChunk);
-      for (size_t i = first; i < end; ++i) {
-        const size_t e = offset[c] + (i - first);
-        visible_[e] = static_cast<uint32_t>(i);
-        const Surfel& s = map_[i];
-        if (s.removed()) continue;
-        const Eigen::Vector3f q = r * s.position + t;
-        in_camera_[e] = q;
-        normal_in_camera_[e] = r * s.normal;
-        if (q.z() < near) continue;
-        const float a = q.x() / q.z(), b = q.y() / q.z(), r2 = a * a + b * b;
-        const float radial = 1.f + r2 * (k1 + r2 * (k2 + r2 * k3));
-        const float u = fx * (a * radial + 2.f * p1 * a * b + p2 * (r2 + 2.f * a * a)) + cx;
-        const float v = fy * (b * radial + p1 * (r2 + 2.f * b * b) + 2.f * p2 * a * b) + cy;
-        // Nearest pixel (truncating u + 0.5 rounds it for u >= -0.5; std::lround and std::floor
-        // are library calls on baseline x86-64, and this loop runs per surfel in view).
-        if (!(u >= -0.5f && v >= -0.5f)) continue;
-        const int x = static_cast<int>(u + 0.5f), y = static_cast<int>(v + 0.5f);
-        if (x < 0 || y < 0 || x >= width || y >= height) continue;
-        const int pixel = y * width + x;
-        pixel_of_[e] = pixel;
-        const uint64_t packed = Pack(q.z(), static_cast<uint32_t>(e));
-        uint64_t old = cells[pixel].load(std::memory_order_relaxed);
-        while (packed < old &&
-               !cells[pixel].compare_exchange_weak(old, packed, std::memory_order_relaxed)) {
-        }
-      }
-    }
-  });
-}
+// What stays the same over one measurement's pixels.
+struct SurfelFusion::StepConstants {
+  cv::Mat smooth_half;  // the depth at half size, bilateral-filtered (for normals)
+  float cos_max, focal, half_diagonal, two_sigma2, min_z, max_z, max_step, gap;
+  bool has_color;
+};
 
 FusionStats SurfelFusion::Fuse(const Measurement& m) {
   const auto start = std::chrono::steady_clock::now();
   FusionStats stats;
-  const SE3 camera_from_world = m.world_from_camera.Inverse();
-  ProjectMap(camera_from_world);
+  ProjectMap(m.world_from_camera.Inverse());
   const int width = camera_.width, height = camera_.height, step = options_.pixel_step;
-  const int grid_cols = (width - m.grid_offset + step - 1) / step;
-  const int grid_rows = (height - m.grid_offset + step - 1) / step;
-  std::vector<PixelResult> results(static_cast<size_t>(grid_cols) * grid_rows);
-  const float cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * kDegToRad));
-  const float focal = static_cast<float>(0.5 * (camera_.fx + camera_.fy));
-  const float half_diagonal = 0.5f * std::hypot(float(width), float(height));
-  const float two_sigma2 =
-      static_cast<float>(2 * options_.confidence_sigma * options_.confidence_sigma);
-  const float min_z = static_cast<float>(options_.min_depth_m),
-              max_z = static_cast<float>(options_.max_depth_m);
-  const float max_step = static_cast<float>(options_.max_neighbour_step);
-  const float gap = static_cast<float>(options_.max_depth_gap_m);
-  const bool has_color = m.color.type() == CV_8UC3 && m.color.size() == m.depth.size();
+  StepConstants k;
+  k.cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * kDegToRad));
+  k.focal = static_cast<float>(0.5 * (camera_.fx + camera_.fy));
+  k.half_diagonal = 0.5f * std::hypot(float(width), float(height));
+  k.two_sigma2 = static_cast<float>(2 * options_.confidence_sigma * options_.confidence_sigma);
+  k.min_z = static_cast<float>(options_.min_depth_m);
+  k.max_z = static_cast<float>(options_.max_depth_m);
+  k.max_step = static_cast<float>(options_.max_neighbour_step);
+  k.gap = static_cast<float>(options_.max_depth_gap_m);
+  k.has_color = m.color.type() == CV_8UC3 && m.color.size() == m.depth.size();
   // Normals (and radii) from the depth smoothed by a bilateral filter, as ElasticFusion does: the
   // sensor's quantised depth makes neighbour differences too noisy for the normal test (at 3 m a
   // Kinect v1 depth step is about 3 cm). The filter runs on the depth at half size (normals span
   // normal_baseline_px either side); positions come from the measured depth.
-  cv::Mat half, smooth_half;
+  cv::Mat half;
   cv::resize(m.depth, half, {}, 0.5, 0.5, cv::INTER_NEAREST);
-  cv::bilateralFilter(half, smooth_half, options_.normal_filter_px, options_.normal_filter_depth_m,
-                      0.5 * options_.normal_filter_px);
-  auto smooth_vertex = [&](int x, int y) -> Eigen::Vector3f {
-    const float z = smooth_half.at<float>(std::min(y / 2, smooth_half.rows - 1),
-                                          std::min(x / 2, smooth_half.cols - 1));
-    const cv::Vec2f& n = rays_.at<cv::Vec2f>(y, x);
-    return Eigen::Vector3f(n[0] * z, n[1] * z, z);
-  };
-  auto vertex = [&](const cv::Mat& depth, int x, int y) -> Eigen::Vector3f {
-    const float z = depth.at<float>(y, x);
-    const cv::Vec2f& n = rays_.at<cv::Vec2f>(y, x);
-    return Eigen::Vector3f(n[0] * z, n[1] * z, z);
-  };
+  cv::bilateralFilter(half, k.smooth_half, options_.normal_filter_px,
+                      options_.normal_filter_depth_m, 0.5 * options_.normal_filter_px);
+  const int grid_cols = (width - m.grid_offset + step - 1) / step;
+  const int grid_rows = (height - m.grid_offset + step - 1) / step;
+  std::vector<PixelResult> results(static_cast<size_t>(grid_cols) * grid_rows);
   cv::parallel_for_(cv::Range(0, grid_rows), [&](const cv::Range& range) {
-    for (int gy = range.start; gy < range.end; ++gy) {
-      const int y = m.grid_offset + gy * step;
-      if (y < 1 || y + 1 >= height) continue;
+    for (int gy = range.start; gy < range.end; ++gy)
       for (int gx = 0; gx < grid_cols; ++gx) {
-        const int x = m.grid_offset + gx * step;
-        if (x < 1 || x + 1 >= width) continue;
-        if (!m.mask.empty() && !m.mask.at<uint8_t>(y, x)) continue;
-        const float z = m.depth.at<float>(y, x);
-        if (!(z >= min_z && z <= max_z)) continue;
-        // A normal needs all four neighbours on the same surface.
-        bool neighbours = true;
-        for (const auto& [dx, dy] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
-          const float zn = m.depth.at<float>(y + dy, x + dx);
-          neighbours &= zn > 0 && std::abs(zn - z) <= max_step * z;
-        }
-        if (!neighbours) continue;
         PixelResult& res = results[static_cast<size_t>(gy) * grid_cols + gx];
-        res.point = vertex(m.depth, x, y);
-        const int b = options_.normal_baseline_px;
-        if (x < b || y < b || x + b >= width || y + b >= height) continue;
-        Eigen::Vector3f n = (smooth_vertex(x + b, y) - smooth_vertex(x - b, y))
-                                .cross(smooth_vertex(x, y + b) - smooth_vertex(x, y - b));
-        if (!(n.norm() > 0)) continue;
-        n.normalize();
-        if (n.dot(res.point) > 0) n = -n;  // facing the camera
-        res.normal = n;
-        const float head_on = std::sqrt(2.f) * z / focal;
-        res.radius = std::min(2.f * head_on, head_on / std::max(std::abs(n.z()), 1e-3f));
-        const float ux = x - float(camera_.cx), uy = y - float(camera_.cy);
-        const float rr2 = (ux * ux + uy * uy) / (half_diagonal * half_diagonal);
-        const float pixel_weight = m.weight.empty() ? 1.f : m.weight.at<float>(y, x);
-        res.weight =
-            std::exp(-rr2 / two_sigma2) * pixel_weight * static_cast<float>(m.weight_scale);
-        if (!(res.weight > 0)) continue;
-        if (has_color) {
-          const cv::Vec3b c = m.color.at<cv::Vec3b>(y, x);
-          res.red = c[2], res.green = c[1], res.blue = c[0];
-        }
-        res.source = m.source;
-        res.valid = true;
-        // The surfel in the 3x3 index-map window nearest the pixel's ray, within the depth gap
-        // along it and with a normal within the angle.
-        const Eigen::Vector3f ray = res.point / z;
-        const float lambda = ray.norm();
-        float best = std::numeric_limits<float>::max();
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const uint64_t packed = index_map_[static_cast<size_t>(y + dy) * width + x + dx];
-            if (packed == kEmpty) continue;
-            const uint32_t e = static_cast<uint32_t>(packed & 0xffffffffu);
-            const Eigen::Vector3f& q = in_camera_[e];
-            if (std::abs(q.z() - z) * lambda >= gap) continue;
-            if (normal_in_camera_[e].dot(n) < cos_max) continue;
-            const float dist = ray.cross(q).squaredNorm();  // |ray x q|^2 orders as the distance
-            if (dist < best) {
-              best = dist;
-              res.match = static_cast<int>(visible_[e]);
-            }
-          }
+        const int x = m.grid_offset + gx * step, y = m.grid_offset + gy * step;
+        if (MeasurePixel(m, k, x, y, &res)) res.match = NearestAlongRay(k, x, y, res);
+      }
+  });
+  Integrate(m, results, &stats);
+  if (m.time_step) CleanUp(m, &stats);
+  stats.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return stats;
+}
+
+bool SurfelFusion::MeasurePixel(const Measurement& m, const StepConstants& k, int x, int y,
+                                PixelResult* res) const {
+  const int width = camera_.width, height = camera_.height;
+  if (y < 1 || y + 1 >= height || x < 1 || x + 1 >= width) return false;
+  if (!m.mask.empty() && !m.mask.at<uint8_t>(y, x)) return false;
+  const float z = m.depth.at<float>(y, x);
+  if (!(z >= k.min_z && z <= k.max_z)) return false;
+  // A normal needs all four neighbours on the same surface.
+  bool neighbours = true;
+  for (const auto& [dx, dy] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
+    const float zn = m.depth.at<float>(y + dy, x + dx);
+    neighbours &= zn > 0 && std::abs(zn - z) <= k.max_step * z;
+  }
+  if (!neighbours) return false;
+  auto vertex_at = [&](float depth, int u, int v) -> Eigen::Vector3f {
+    const cv::Vec2f& n = rays_.at<cv::Vec2f>(v, u);
+    return Eigen::Vector3f(n[0] * depth, n[1] * depth, depth);
+  };
+  auto smooth_vertex = [&](int u, int v) {
+    const cv::Mat& s = k.smooth_half;
+    return vertex_at(s.at<float>(std::min(v / 2, s.rows - 1), std::min(u / 2, s.cols - 1)), u, v);
+  };
+  res->point = vertex_at(z, x, y);
+  const int b = options_.normal_baseline_px;
+  if (x < b || y < b || x + b >= width || y + b >= height) return false;
+  Eigen::Vector3f n = (smooth_vertex(x + b, y) - smooth_vertex(x - b, y))
+                          .cross(smooth_vertex(x, y + b) - smooth_vertex(x, y - b));
+  if (!(n.norm() > 0)) return false;
+  n.normalize();
+  if (n.dot(res->point) > 0) n = -n;  // facing the camera
+  res->normal = n;
+  const float head_on = std::sqrt(2.f) * z / k.focal;
+  res->radius = std::min(2.f * head_on, head_on / std::max(std::abs(n.z()), 1e-3f));
+  const float ux = x - float(camera_.cx), uy = y - float(camera_.cy);
+  const float rr2 = (ux * ux + uy * uy) / (k.half_diagonal * k.half_diagonal);
+  const float pixel_weight = m.weight.empty() ? 1.f : m.weight.at<float>(y, x);
+  res->weight = std::exp(-rr2 / k.two_sigma2) * pixel_weight * static_cast<float>(m.weight_scale);
+  if (!(res->weight > 0)) return false;
+  if (k.has_color) {
+    const cv::Vec3b c = m.color.at<cv::Vec3b>(y, x);
+    res->red = c[2], res->green = c[1], res->blue = c[0];
+  }
+  res->source = m.source;
+  res->valid = true;
+  return true;
+}
+
+int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
+                                  const PixelResult& res) const {
+  // The surfel in the 3x3 index-map window nearest the pixel's ray, within the depth gap along it
+  // and with a normal within the angle.
+  const float z = res.point.z();
+  const Eigen::Vector3f ray = res.point / z;
+  const float lambda = ray.norm();
+  float best = std::numeric_limits<float>::max();
+  int match = -1;
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      const uint64_t packed = index_map_[static_cast<size_t>(y + dy) * camera_.width + x + dx];
+      if (packed == kEmpty) continue;
+      const uint32_t e = static_cast<uint32_t>(packed & 0xffffffffu);
+      const Eigen::Vector3f& q = in_camera_[e];
+      if (std::abs(q.z() - z) * lambda >= k.gap) continue;
+      if (normal_in_camera_[e].dot(res.normal) < k.cos_max) continue;
+      const float dist = ray.cross(q).squaredNorm();  // |ray x q|^2 orders as the distance
+      if (dist < best) {
+        best = dist;
+        match = static_cast<int>(visible_[e]);
       }
     }
-  });
+  return match;
+}
+
+void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult>& results,
+                             FusionStats* stats) {
   // Merge and create, one pixel after the other (several pixels may update one surfel).
   const Eigen::Matrix3f r_wc = m.world_from_camera.RotationMatrix().cast<float>();
   const Eigen::Vector3f t_wc = m.world_from_camera.translation().cast<float>();
   for (const PixelResult& res : results) {
     if (!res.valid) continue;
-    ++stats.measured;
+    ++stats->measured;
     const Eigen::Vector3f p = r_wc * res.point + t_wc, n = r_wc * res.normal;
     if (res.match >= 0) {
       Surfel& s = map_[res.match];
@@ -355,7 +269,7 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
       s.last_frame = frame_;
       s.keyframe = m.keyframe;
       Touch(res.match);
-      ++stats.merged;
+      ++stats->merged;
     } else {
       Surfel s;
       s.position = p;
@@ -369,13 +283,9 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
       map_.Add(s);
       if (chunks_.size() * kChunk < map_.size()) chunks_.emplace_back();
       Touch(map_.size() - 1);
-      ++stats.created;
+      ++stats->created;
     }
   }
-  if (m.time_step) CleanUp(m, &stats);
-  stats.ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  return stats;
 }
 
 void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
@@ -481,45 +391,6 @@ size_t SurfelFusion::MemoryBytes() const {
          (in_camera_.capacity() + normal_in_camera_.capacity()) * sizeof(Eigen::Vector3f) +
          (pixel_of_.capacity() + visible_.capacity()) * sizeof(int32_t) +
          chunks_.capacity() * sizeof(Chunk);
-}
-
-cv::Mat SurfelFusion::RenderDepth(const SE3& world_from_camera) {
-  const SE3 camera_from_world = world_from_camera.Inverse();
-  cv::Mat depth = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1);
-  chunks_.resize((map_.size() + kChunk - 1) / kChunk);
-  const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
-  const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
-  const float focal = static_cast<float>(0.5 * (camera_.fx + camera_.fy));
-  constexpr int kMaxSplat = 4;  // pixels
-  for (size_t c = 0; c < chunks_.size(); ++c) {
-    if (!ChunkVisible(c, camera_from_world)) continue;
-    const size_t end = std::min(map_.size(), (c + 1) * kChunk);
-    for (size_t i = c * kChunk; i < end; ++i) {
-      const Surfel& s = map_[i];
-      if (!IsStable(s)) continue;
-      const Eigen::Vector3f q = r * s.position + t, n = r * s.normal;
-      if (q.z() < options_.min_depth_m) continue;
-      const float n_dot_q = n.dot(q);
-      const Eigen::Vector2d uv = camera_.ProjectDistorted(q.cast<double>());
-      if (!(uv.x() >= -0.5 && uv.y() >= -0.5)) continue;
-      const int x0 = static_cast<int>(uv.x() + 0.5), y0 = static_cast<int>(uv.y() + 0.5);
-      const int radius = std::min(kMaxSplat, static_cast<int>(s.radius * focal / q.z()));
-      for (int y = std::max(0, y0 - radius); y <= std::min(camera_.height - 1, y0 + radius); ++y)
-        for (int x = std::max(0, x0 - radius); x <= std::min(camera_.width - 1, x0 + radius); ++x) {
-          // Where the pixel's ray meets the surfel's disc (an oriented splat: a disc drawn at
-          // one depth would bias slanted surfaces towards the camera, nearest first).
-          const cv::Vec2f& ray = rays_.at<cv::Vec2f>(y, x);
-          const Eigen::Vector3f dir(ray[0], ray[1], 1.f);
-          const float along = n.dot(dir);
-          if (std::abs(along) < 1e-3f) continue;
-          const float z = n_dot_q / along;
-          if (!(z > 0) || (dir * z - q).squaredNorm() > s.radius * s.radius) continue;
-          float& d = depth.at<float>(y, x);
-          if (d == 0.f || z < d) d = z;
-        }
-    }
-  }
-  return depth;
 }
 
 void SurfelFusion::AddSurfels(const std::vector<Surfel>& surfels) {

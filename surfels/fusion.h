@@ -120,7 +120,16 @@ class SurfelFusion {
 
  private:
   struct Measurement;
+  struct PixelResult;
+  struct StepConstants;
   FusionStats Fuse(const Measurement& m);
+  // A measured pixel's vertex, normal, radius, weight and colour (false: not measurable there).
+  bool MeasurePixel(const Measurement& m, const StepConstants& k, int x, int y,
+                    PixelResult* res) const;
+  // The surfel (map index) the measured pixel at (x, y) associates with, -1 none.
+  int NearestAlongRay(const StepConstants& k, int x, int y, const PixelResult& res) const;
+  void Integrate(const Measurement& m, const std::vector<PixelResult>& results,
+                 FusionStats* stats);
   void ProjectMap(const SE3& camera_from_world);
   void CleanUp(const Measurement& m, FusionStats* stats);
   void Touch(size_t surfel) { chunks_[surfel / kChunk].dirty = true; }
@@ -129,6 +138,7 @@ class SurfelFusion {
   // Surfels are culled by chunks of kChunk consecutive ones (created together, so close together)
   // with a bounding sphere, recomputed when a surfel in the chunk changed.
   static constexpr size_t kChunk = 1024;
+  static constexpr uint64_t kEmpty = ~uint64_t{0};  // an index-map pixel no surfel projects to
   struct Chunk {
     Eigen::Vector3f centre = Eigen::Vector3f::Zero();
     float radius = 0;

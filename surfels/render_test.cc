@@ -20,13 +20,18 @@ std::vector<Surfel> Square() {
   return out;
 }
 
-TEST(RenderSurfels, DrawsTheSquareAtItsDepthWithItsColour) {
+Camera SmallCamera() {
   Camera camera;
   camera.width = 320;
   camera.height = 240;
   camera.fx = camera.fy = 300;
   camera.cx = 159.5;
   camera.cy = 119.5;
+  return camera;
+}
+
+TEST(RenderSurfels, DrawsTheSquareAtItsDepthWithItsColour) {
+  const Camera camera = SmallCamera();
   const SurfelImage image = RenderSurfels(Square(), camera, SE3(), {});
   // The square spans +-0.5 m at 2 m: +-75 px around the centre, with no gaps between discs.
   EXPECT_FLOAT_EQ(image.depth.at<float>(120, 160), 2.f);
@@ -40,12 +45,7 @@ TEST(RenderSurfels, DrawsTheSquareAtItsDepthWithItsColour) {
 }
 
 TEST(ViewOfMap, FramesTheWholeMap) {
-  Camera camera;
-  camera.width = 320;
-  camera.height = 240;
-  camera.fx = camera.fy = 300;
-  camera.cx = 159.5;
-  camera.cy = 119.5;
+  const Camera camera = SmallCamera();
   // From above and in front, with world -y up.
   const SE3 view = ViewOfMap(Square(), camera, Eigen::Vector3d(0, 1, 1), Eigen::Vector3d(0, -1, 0));
   const SurfelImage image = RenderSurfels(Square(), camera, view, {});

@@ -1,0 +1,159 @@
+// The map seen from a camera: culling by chunks, the projected index map, the rendered depth.
+#include <algorithm>
+#include <atomic>
+#include <cstring>
+#include <limits>
+#include <opencv2/core/utility.hpp>
+
+#include "surfels/fusion.h"  // NOLINT: the class's second source file
+
+namespace gf {
+namespace {
+
+// Packs a positive depth and a surfel index so that the smaller value is the nearer surfel.
+uint64_t Pack(float z, uint32_t index) {
+  uint32_t bits;
+  std::memcpy(&bits, &z, sizeof(bits));  // positive floats order as their bits do
+  return (static_cast<uint64_t>(bits) << 32) | index;
+}
+
+}  // namespace
+
+bool SurfelFusion::ChunkVisible(size_t c, const SE3& camera_from_world) {
+  Chunk& chunk = chunks_[c];
+  if (chunk.dirty) {
+    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+    Eigen::Vector3f hi = -lo;
+    float largest = 0;
+    const size_t end = std::min(map_.size(), (c + 1) * kChunk);
+    for (size_t i = c * kChunk; i < end; ++i) {
+      const Surfel& s = map_[i];
+      if (s.removed()) continue;
+      lo = lo.cwiseMin(s.position);
+      hi = hi.cwiseMax(s.position);
+      largest = std::max(largest, s.radius);
+    }
+    chunk.centre = 0.5f * (lo + hi);
+    chunk.radius = lo.x() > hi.x() ? -1.f : 0.5f * (hi - lo).norm() + largest;
+    chunk.dirty = false;
+  }
+  if (chunk.radius < 0) return false;  // all removed
+  const Eigen::Vector3f q = (camera_from_world * chunk.centre.cast<double>()).cast<float>();
+  const float r = chunk.radius;
+  if (q.z() + r < options_.min_depth_m * 0.5) return false;
+  // Outside one of the four planes through the camera centre and the image's edges.
+  // Signed distance of the centre beyond the plane a = slope * z (a: x or y, or their negatives).
+  auto beyond = [&](float a, float slope) {
+    return (a - slope * q.z()) / std::sqrt(1.f + slope * slope) > r;
+  };
+  if (beyond(q.x(), view_x_[1]) || beyond(-q.x(), -view_x_[0])) return false;
+  if (beyond(q.y(), view_y_[1]) || beyond(-q.y(), -view_y_[0])) return false;
+  return true;
+}
+
+void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
+  std::fill(index_map_.begin(), index_map_.end(), kEmpty);
+  chunks_.resize((map_.size() + kChunk - 1) / kChunk);
+  const int chunks = static_cast<int>(chunks_.size());
+  // The chunks in view, and where each one's entries start (entries: the surfels of the chunks
+  // in view, in map order; the per-surfel work of this step runs over them only).
+  std::vector<uint8_t> in_view(chunks);
+  cv::parallel_for_(cv::Range(0, chunks), [&](const cv::Range& range) {
+    for (int c = range.start; c < range.end; ++c) in_view[c] = ChunkVisible(c, camera_from_world);
+  });
+  std::vector<size_t> offset(chunks);
+  size_t entries = 0;
+  for (int c = 0; c < chunks; ++c) {
+    offset[c] = entries;
+    if (in_view[c]) entries += std::min(map_.size(), (c + 1) * kChunk) - c * kChunk;
+  }
+  visible_.resize(entries);
+  in_camera_.resize(entries);
+  normal_in_camera_.resize(entries);
+  pixel_of_.assign(entries, -1);
+  const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
+  const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
+  // Depth and entry packed into one 64-bit word, so that the nearest surfel per pixel is an atomic
+  // minimum (projection runs in parallel).
+  auto* cells = reinterpret_cast<std::atomic<uint64_t>*>(index_map_.data());
+  static_assert(sizeof(std::atomic<uint64_t>) == sizeof(uint64_t), "atomic words");
+  const int width = camera_.width, height = camera_.height;
+  // Camera::ProjectDistorted in float, inlined: this runs for every surfel in view.
+  const float fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
+  const float k1 = camera_.distortion[0], k2 = camera_.distortion[1], p1 = camera_.distortion[2],
+              p2 = camera_.distortion[3], k3 = camera_.distortion[4];
+  const float near = static_cast<float>(options_.min_depth_m * 0.5);
+  cv::parallel_for_(cv::Range(0, chunks), [&](const cv::Range& range) {
+    for (int c = range.start; c < range.end; ++c) {
+      if (!in_view[c]) continue;
+      const size_t first = c * kChunk, end = std::min(map_.size(), first + kChunk);
+      for (size_t i = first; i < end; ++i) {
+        const size_t e = offset[c] + (i - first);
+        visible_[e] = static_cast<uint32_t>(i);
+        const Surfel& s = map_[i];
+        if (s.removed()) continue;
+        const Eigen::Vector3f q = r * s.position + t;
+        in_camera_[e] = q;
+        normal_in_camera_[e] = r * s.normal;
+        if (q.z() < near) continue;
+        const float a = q.x() / q.z(), b = q.y() / q.z(), r2 = a * a + b * b;
+        const float radial = 1.f + r2 * (k1 + r2 * (k2 + r2 * k3));
+        const float u = fx * (a * radial + 2.f * p1 * a * b + p2 * (r2 + 2.f * a * a)) + cx;
+        const float v = fy * (b * radial + p1 * (r2 + 2.f * b * b) + 2.f * p2 * a * b) + cy;
+        // Nearest pixel (truncating u + 0.5 rounds it for u >= -0.5; std::lround and std::floor
+        // are library calls on baseline x86-64, and this loop runs per surfel in view).
+        if (!(u >= -0.5f && v >= -0.5f)) continue;
+        const int x = static_cast<int>(u + 0.5f), y = static_cast<int>(v + 0.5f);
+        if (x < 0 || y < 0 || x >= width || y >= height) continue;
+        const int pixel = y * width + x;
+        pixel_of_[e] = pixel;
+        const uint64_t packed = Pack(q.z(), static_cast<uint32_t>(e));
+        uint64_t old = cells[pixel].load(std::memory_order_relaxed);
+        while (packed < old &&
+               !cells[pixel].compare_exchange_weak(old, packed, std::memory_order_relaxed)) {
+        }
+      }
+    }
+  });
+}
+
+cv::Mat SurfelFusion::RenderDepth(const SE3& world_from_camera) {
+  const SE3 camera_from_world = world_from_camera.Inverse();
+  cv::Mat depth = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1);
+  chunks_.resize((map_.size() + kChunk - 1) / kChunk);
+  const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
+  const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
+  const float focal = static_cast<float>(0.5 * (camera_.fx + camera_.fy));
+  constexpr int kMaxSplat = 4;  // pixels
+  for (size_t c = 0; c < chunks_.size(); ++c) {
+    if (!ChunkVisible(c, camera_from_world)) continue;
+    const size_t end = std::min(map_.size(), (c + 1) * kChunk);
+    for (size_t i = c * kChunk; i < end; ++i) {
+      const Surfel& s = map_[i];
+      if (!IsStable(s)) continue;
+      const Eigen::Vector3f q = r * s.position + t, n = r * s.normal;
+      if (q.z() < options_.min_depth_m) continue;
+      const float n_dot_q = n.dot(q);
+      const Eigen::Vector2d uv = camera_.ProjectDistorted(q.cast<double>());
+      if (!(uv.x() >= -0.5 && uv.y() >= -0.5)) continue;
+      const int x0 = static_cast<int>(uv.x() + 0.5), y0 = static_cast<int>(uv.y() + 0.5);
+      const int radius = std::min(kMaxSplat, static_cast<int>(s.radius * focal / q.z()));
+      for (int y = std::max(0, y0 - radius); y <= std::min(camera_.height - 1, y0 + radius); ++y)
+        for (int x = std::max(0, x0 - radius); x <= std::min(camera_.width - 1, x0 + radius); ++x) {
+          // Where the pixel's ray meets the surfel's disc (an oriented splat: a disc drawn at
+          // one depth would bias slanted surfaces towards the camera, nearest first).
+          const cv::Vec2f& ray = rays_.at<cv::Vec2f>(y, x);
+          const Eigen::Vector3f dir(ray[0], ray[1], 1.f);
+          const float along = n.dot(dir);
+          if (std::abs(along) < 1e-3f) continue;
+          const float z = n_dot_q / along;
+          if (!(z > 0) || (dir * z - q).squaredNorm() > s.radius * s.radius) continue;
+          float& d = depth.at<float>(y, x);
+          if (d == 0.f || z < d) d = z;
+        }
+    }
+  }
+  return depth;
+}
+
+}  // namespace gf
