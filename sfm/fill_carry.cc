@@ -42,15 +42,10 @@ std::string CarriedFillResult::BriefReport() const {
   return s.str();
 }
 
-CarriedFillResult CarryFills(const RgbdFrame& key1, const SE3& world_from_key1,
-                             const StereoFillResult* own,
-                             const std::vector<const KeyframeFillPoints*>& earlier,
-                             const Camera& camera, const FillCarryOptions& options) {
-  std::string problem;
-  GF_CHECK(options.Check(&problem), problem);
-  GF_CHECK(key1.depth.type() == CV_32FC1 && key1.hole_mask.type() == CV_8UC1 &&
-               key1.depth.size() == key1.hole_mask.size(),
-           "need metric depth and a hole mask of the same size");
+namespace {
+
+// The result before carrying: the keyframe's own fill, or its sensor depth alone.
+CarriedFillResult StartFromOwnFill(const RgbdFrame& key1, const StereoFillResult* own) {
   CarriedFillResult r;
   if (own != nullptr && own->success) {
     r.filled_depth = own->filled_depth.clone();
@@ -66,25 +61,24 @@ CarriedFillResult CarryFills(const RgbdFrame& key1, const SE3& world_from_key1,
     r.confidence.setTo(1.f, key1.hole_mask == 0);
   }
   r.filled_pixels = cv::countNonZero(r.fill_mask);
+  return r;
+}
 
-  std::vector<const KeyframeFillPoints*> views;
-  for (const KeyframeFillPoints* v : earlier)
-    if (v != nullptr && !v->world_points.empty()) views.push_back(v);
-  if (options.max_keyframes == 0 || views.empty()) return r;
-  if (static_cast<int>(views.size()) > options.max_keyframes)
-    views.erase(views.begin(), views.end() - options.max_keyframes);
-
-  // One slot per hole pixel; each earlier keyframe leaves its nearest point's depth there.
-  cv::Mat slot(key1.depth.size(), CV_32SC1, cv::Scalar(-1));
-  std::vector<cv::Point> hole_pixels;
+// Each earlier view's fill points projected into key1's hole pixels: candidates[s * n + k] is the
+// nearest depth view k leaves on hole pixel s (0: none); `hole_pixels` lists the pixels.
+std::vector<float> ProjectIntoHoles(const cv::Mat& hole_mask, const SE3& world_from_key1,
+                                    const std::vector<const KeyframeFillPoints*>& views,
+                                    const Camera& camera, std::vector<cv::Point>* hole_pixels) {
+  // One slot per hole pixel.
+  cv::Mat slot(hole_mask.size(), CV_32SC1, cv::Scalar(-1));
   for (int y = 0; y < slot.rows; ++y)
     for (int x = 0; x < slot.cols; ++x)
-      if (key1.hole_mask.at<uint8_t>(y, x)) {
-        slot.at<int>(y, x) = static_cast<int>(hole_pixels.size());
-        hole_pixels.emplace_back(x, y);
+      if (hole_mask.at<uint8_t>(y, x)) {
+        slot.at<int>(y, x) = static_cast<int>(hole_pixels->size());
+        hole_pixels->emplace_back(x, y);
       }
   const size_t n = views.size();
-  std::vector<float> candidates(hole_pixels.size() * n, 0.f);
+  std::vector<float> candidates(hole_pixels->size() * n, 0.f);
   const SE3 key1_from_world = world_from_key1.Inverse();
   const Eigen::Matrix3f rotation = key1_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f translation = key1_from_world.translation().cast<float>();
@@ -112,7 +106,33 @@ CarriedFillResult CarryFills(const RgbdFrame& key1, const SE3& world_from_key1,
       if (c == 0.f || p.z() < c) c = p.z();
     }
   }
+  return candidates;
+}
 
+}  // namespace
+
+CarriedFillResult CarryFills(const RgbdFrame& key1, const SE3& world_from_key1,
+                             const StereoFillResult* own,
+                             const std::vector<const KeyframeFillPoints*>& earlier,
+                             const Camera& camera, const FillCarryOptions& options) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+  GF_CHECK(key1.depth.type() == CV_32FC1 && key1.hole_mask.type() == CV_8UC1 &&
+               key1.depth.size() == key1.hole_mask.size(),
+           "need metric depth and a hole mask of the same size");
+  CarriedFillResult r = StartFromOwnFill(key1, own);
+  std::vector<const KeyframeFillPoints*> views;
+  for (const KeyframeFillPoints* v : earlier)
+    if (v != nullptr && !v->world_points.empty()) views.push_back(v);
+  if (options.max_keyframes == 0 || views.empty()) return r;
+  if (static_cast<int>(views.size()) > options.max_keyframes)
+    views.erase(views.begin(), views.end() - options.max_keyframes);
+
+  std::vector<cv::Point> hole_pixels;
+  const std::vector<float> candidates =
+      ProjectIntoHoles(key1.hole_mask, world_from_key1, views, camera, &hole_pixels);
+  // A hole pixel takes the median of the views' depths when enough of them agree with it.
+  const size_t n = views.size();
   std::vector<float> values;
   for (size_t s = 0; s < hole_pixels.size(); ++s) {
     values.clear();

@@ -51,30 +51,33 @@ std::string PairChoice::BriefReport() const {
   return buffer;
 }
 
-PairChoice SelectPartner(const StereoKeyframe& key1,
-                         const std::vector<std::shared_ptr<const StereoKeyframe>>& candidates,
-                         const Camera& camera, const PairSelectionOptions& options) {
-  PairChoice choice;
-  struct Geometry {
-    int index;
-    double baseline, rotation_deg;
-    bool forward;
-  };
-  // Key1's depth range (median and 5th percentile of its measured depth).
-  const std::vector<float> depths = SortedDepthSample(key1.frame.depth, 4);
-  if (depths.size() < 100) {
-    choice.reason = "keyframe has almost no measured depth";
-    return choice;
-  }
-  const double median_depth = depths[depths.size() / 2], near_depth = depths[depths.size() / 20];
-  const double f = 0.5 * (camera.fx + camera.fy);
-  std::vector<Geometry> in_range;
+namespace {
+
+// A candidate's geometry relative to key1.
+struct CandidateGeometry {
+  int index;
+  double baseline, rotation_deg;
+  bool forward;
+};
+
+// The candidates whose parallax, baseline and rotation suit stereo with key1 (farthest first),
+// and how many of the others failed which test.
+struct ScreenedCandidates {
+  std::vector<CandidateGeometry> in_range;
   int too_short = 0, too_long = 0, too_rotated = 0, forward = 0;
+};
+
+ScreenedCandidates ScreenCandidates(
+    const StereoKeyframe& key1,
+    const std::vector<std::shared_ptr<const StereoKeyframe>>& candidates, const Camera& camera,
+    const PairSelectionOptions& options, double median_depth, double near_depth) {
+  ScreenedCandidates screened;
+  const double f = 0.5 * (camera.fx + camera.fy);
   for (size_t i = 0; i < candidates.size(); ++i) {
     const SE3 rel = key1.world_from_camera.Inverse() * candidates[i]->world_from_camera;
     const bool is_forward = IsForwardPair(camera, rel, options.geometry.epipole_margin_px);
-    const Geometry g{static_cast<int>(i), rel.TranslationNorm(), rel.RotationAngle() * kDegPerRad,
-                     is_forward};
+    const CandidateGeometry g{static_cast<int>(i), rel.TranslationNorm(),
+                              rel.RotationAngle() * kDegPerRad, is_forward};
     // Parallax comes from the motion across key1's optical axis, or from all of it when forward
     // pairs go to the plane sweep.
     const double lateral = options.allow_forward ? g.baseline : rel.translation().head<2>().norm();
@@ -83,23 +86,33 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
         is_forward ? options.max_near_disparity_sweep_px : options.max_near_disparity_px;
     if (g.baseline < options.geometry.min_baseline_m ||
         f * lateral / median_depth < options.min_median_disparity_px) {
-      ++too_short;
+      ++screened.too_short;
     } else if (g.baseline > options.max_baseline_m ||
                f * lateral / near_depth > max_near_disparity) {
-      ++too_long;
+      ++screened.too_long;
     } else if (g.rotation_deg > options.max_rotation_deg) {
-      ++too_rotated;
+      ++screened.too_rotated;
     } else if (!options.allow_forward && is_forward) {
-      ++forward;
+      ++screened.forward;
     } else {
-      in_range.push_back(g);
+      screened.in_range.push_back(g);
     }
   }
-  // Farthest first: the first candidate with enough matches is the partner, the next the third
-  // (for a forward partner with spread_third_view_forward: the rest are re-ordered farthest from
-  // the partner first).
-  std::sort(in_range.begin(), in_range.end(),
-            [](const Geometry& a, const Geometry& b) { return a.baseline > b.baseline; });
+  std::sort(screened.in_range.begin(), screened.in_range.end(),
+            [](const CandidateGeometry& a, const CandidateGeometry& b) {
+              return a.baseline > b.baseline;
+            });
+  return screened;
+}
+
+// Refines each screened candidate's pose in turn (farthest first): the first with enough matches
+// is the partner, the next the third view (for a forward partner with spread_third_view_forward,
+// the rest are re-ordered farthest from the partner first). Returns the most inliers among the
+// candidates that fell short.
+int ChoosePartnerAndThird(const StereoKeyframe& key1,
+                          const std::vector<std::shared_ptr<const StereoKeyframe>>& candidates,
+                          const Camera& camera, const PairSelectionOptions& options,
+                          std::vector<CandidateGeometry> in_range, PairChoice* choice) {
   // The tracked relative pose can be a few centimetres off; each candidate's pose is refined
   // (PnP on the matches) and its RANSAC inliers count as the pair's matches.
   int fewest_short = 0;
@@ -107,37 +120,59 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
   PoseRefinementOptions features_only = options.refine;
   features_only.photometric = false;  // dense alignment only for the chosen views, below
   for (size_t n = 0; n < in_range.size(); ++n) {
-    if (choice.evaluated >= options.max_evaluations) break;
-    const Geometry g = in_range[n];
+    if (choice->evaluated >= options.max_evaluations) break;
+    const CandidateGeometry g = in_range[n];
     const PoseRefinement pose = RefinePairPose(
         key1, *candidates[g.index], camera,
         key1_from_world * candidates[g.index]->world_from_camera, options.match, features_only);
-    ++choice.evaluated;
+    ++choice->evaluated;
     if (!pose.success || pose.inliers < options.min_matches) {
       fewest_short = std::max(fewest_short, pose.inliers);
       continue;
     }
-    if (choice.found) {
-      choice.third = g.index;
-      choice.third_pose = pose;
+    if (choice->found) {
+      choice->third = g.index;
+      choice->third_pose = pose;
       break;
     }
-    choice.found = true;
-    choice.partner = g.index;
-    choice.matches = pose.inliers;
-    choice.baseline_m = pose.key1_from_key2.TranslationNorm();
-    choice.rotation_deg = pose.key1_from_key2.RotationAngle() * kDegPerRad;
-    choice.partner_pose = pose;
+    choice->found = true;
+    choice->partner = g.index;
+    choice->matches = pose.inliers;
+    choice->baseline_m = pose.key1_from_key2.TranslationNorm();
+    choice->rotation_deg = pose.key1_from_key2.RotationAngle() * kDegPerRad;
+    choice->partner_pose = pose;
     if (g.forward && options.spread_third_view_forward) {
       const Eigen::Vector3d partner_at = candidates[g.index]->world_from_camera.translation();
-      const auto from_partner = [&](const Geometry& c) {
+      const auto from_partner = [&](const CandidateGeometry& c) {
         return (candidates[c.index]->world_from_camera.translation() - partner_at).norm();
       };
-      std::sort(
-          in_range.begin() + n + 1, in_range.end(),
-          [&](const Geometry& a, const Geometry& b) { return from_partner(a) > from_partner(b); });
+      std::sort(in_range.begin() + n + 1, in_range.end(),
+                [&](const CandidateGeometry& a, const CandidateGeometry& b) {
+                  return from_partner(a) > from_partner(b);
+                });
     }
   }
+  return fewest_short;
+}
+
+}  // namespace
+
+PairChoice SelectPartner(const StereoKeyframe& key1,
+                         const std::vector<std::shared_ptr<const StereoKeyframe>>& candidates,
+                         const Camera& camera, const PairSelectionOptions& options) {
+  PairChoice choice;
+  // Key1's depth range (median and 5th percentile of its measured depth).
+  const std::vector<float> depths = SortedDepthSample(key1.frame.depth, 4);
+  if (depths.size() < 100) {
+    choice.reason = "keyframe has almost no measured depth";
+    return choice;
+  }
+  const double median_depth = depths[depths.size() / 2], near_depth = depths[depths.size() / 20];
+  const ScreenedCandidates screened =
+      ScreenCandidates(key1, candidates, camera, options, median_depth, near_depth);
+  const int fewest_short =
+      ChoosePartnerAndThird(key1, candidates, camera, options, screened.in_range, &choice);
+  const SE3 key1_from_world = key1.world_from_camera.Inverse();
   if (options.refine.photometric) {
     if (choice.found)
       AddPhotometricStep(key1, *candidates[choice.partner], camera,
@@ -150,11 +185,11 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
   }
   if (!choice.found) {
     char buffer[200];
-    if (in_range.empty()) {
+    if (screened.in_range.empty()) {
       std::snprintf(buffer, sizeof(buffer),
                     "no keyframe with usable parallax (%d too close, %d too far, %d rotated too "
                     "much, %d forward motion)",
-                    too_short, too_long, too_rotated, forward);
+                    screened.too_short, screened.too_long, screened.too_rotated, screened.forward);
     } else {
       std::snprintf(buffer, sizeof(buffer),
                     "too few matches (best %d RANSAC inliers of %d needed, %d candidates)",
