@@ -17,15 +17,6 @@ constexpr double kDegToRad = M_PI / 180.0;
 
 }  // namespace
 
-// One measured pixel after association.
-struct SurfelFusion::PixelResult {
-  int match = -1;  // surfel index, -1 none
-  bool valid = false;
-  Eigen::Vector3f point, normal;  // camera frame
-  float radius = 0, weight = 0;
-  uint8_t red = 0, green = 0, blue = 0;
-  DepthSource source = DepthSource::kSensor;
-};
 
 struct SurfelFusion::Measurement {
   const cv::Mat& depth;   // CV_32F metres
@@ -86,6 +77,16 @@ SurfelFusion::SurfelFusion(const Camera& camera, const FusionOptions& options)
       rays_.at<cv::Vec2f>(y, x) = {static_cast<float>(r.x()), static_cast<float>(r.y())};
     }
   index_map_.assign(static_cast<size_t>(camera.width) * camera.height, kEmpty);
+  // A measurement's weight by its pixel's distance r from the image centre, over the half
+  // diagonal: exp(-r^2 / (2 sigma^2)).
+  radial_weight_.create(camera.height, camera.width, CV_32FC1);
+  const double half_diagonal = 0.5 * std::hypot(camera.width, camera.height);
+  const double two_sigma2 = 2 * options.confidence_sigma * options.confidence_sigma;
+  for (int y = 0; y < camera.height; ++y)
+    for (int x = 0; x < camera.width; ++x) {
+      const double r = std::hypot(x - camera.cx, y - camera.cy) / half_diagonal;
+      radial_weight_.at<float>(y, x) = static_cast<float>(std::exp(-r * r / two_sigma2));
+    }
   // The image's extent in normalised coordinates (over its border rays), for culling.
   view_x_[0] = view_y_[0] = std::numeric_limits<float>::max();
   view_x_[1] = view_y_[1] = -std::numeric_limits<float>::max();
@@ -126,7 +127,8 @@ FusionStats SurfelFusion::FuseFill(const RgbdFrame& frame, const cv::Mat& filled
 // What stays the same over one measurement's pixels.
 struct SurfelFusion::StepConstants {
   cv::Mat smooth_half;  // the depth at half size, bilateral-filtered (for normals)
-  float cos_max, focal, half_diagonal, two_sigma2, min_z, max_z, max_step, gap;
+  Eigen::Matrix3f world_from_camera_rotation;  // for the normal test in the world frame
+  float cos_max, focal, min_z, max_z, max_step, gap;
   bool has_color;
 };
 
@@ -138,8 +140,7 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
   StepConstants k;
   k.cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * kDegToRad));
   k.focal = static_cast<float>(0.5 * (camera_.fx + camera_.fy));
-  k.half_diagonal = 0.5f * std::hypot(float(width), float(height));
-  k.two_sigma2 = static_cast<float>(2 * options_.confidence_sigma * options_.confidence_sigma);
+  k.world_from_camera_rotation = m.world_from_camera.RotationMatrix().cast<float>();
   k.min_z = static_cast<float>(options_.min_depth_m);
   k.max_z = static_cast<float>(options_.max_depth_m);
   k.max_step = static_cast<float>(options_.max_neighbour_step);
@@ -155,11 +156,14 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
                       options_.normal_filter_depth_m, 0.5 * options_.normal_filter_px);
   const int grid_cols = (width - m.grid_offset + step - 1) / step;
   const int grid_rows = (height - m.grid_offset + step - 1) / step;
-  std::vector<PixelResult> results(static_cast<size_t>(grid_cols) * grid_rows);
+  std::vector<PixelResult>& results = results_;  // kept between steps: no allocation per step
+  results.resize(static_cast<size_t>(grid_cols) * grid_rows);
   cv::parallel_for_(cv::Range(0, grid_rows), [&](const cv::Range& range) {
     for (int gy = range.start; gy < range.end; ++gy)
       for (int gx = 0; gx < grid_cols; ++gx) {
         PixelResult& res = results[static_cast<size_t>(gy) * grid_cols + gx];
+        res.valid = false;  // MeasurePixel sets every other field of a valid pixel
+        res.match = -1;
         const int x = m.grid_offset + gx * step, y = m.grid_offset + gy * step;
         if (MeasurePixel(m, k, x, y, &res)) res.match = NearestAlongRay(k, x, y, res);
       }
@@ -204,14 +208,14 @@ bool SurfelFusion::MeasurePixel(const Measurement& m, const StepConstants& k, in
   res->normal = n;
   const float head_on = std::sqrt(2.f) * z / k.focal;
   res->radius = std::min(2.f * head_on, head_on / std::max(std::abs(n.z()), 1e-3f));
-  const float ux = x - float(camera_.cx), uy = y - float(camera_.cy);
-  const float rr2 = (ux * ux + uy * uy) / (k.half_diagonal * k.half_diagonal);
   const float pixel_weight = m.weight.empty() ? 1.f : m.weight.at<float>(y, x);
-  res->weight = std::exp(-rr2 / k.two_sigma2) * pixel_weight * static_cast<float>(m.weight_scale);
+  res->weight = radial_weight_.at<float>(y, x) * pixel_weight * static_cast<float>(m.weight_scale);
   if (!(res->weight > 0)) return false;
   if (k.has_color) {
     const cv::Vec3b c = m.color.at<cv::Vec3b>(y, x);
     res->red = c[2], res->green = c[1], res->blue = c[0];
+  } else {
+    res->red = res->green = res->blue = 0;
   }
   res->source = m.source;
   res->valid = true;
@@ -225,6 +229,7 @@ int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
   const float z = res.point.z();
   const Eigen::Vector3f ray = res.point / z;
   const float lambda = ray.norm();
+  const Eigen::Vector3f normal_in_world = k.world_from_camera_rotation * res.normal;
   float best = std::numeric_limits<float>::max();
   int match = -1;
   for (int dy = -1; dy <= 1; ++dy)
@@ -234,7 +239,7 @@ int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
       const uint32_t e = static_cast<uint32_t>(packed & 0xffffffffu);
       const Eigen::Vector3f& q = in_camera_[e];
       if (std::abs(q.z() - z) * lambda >= k.gap) continue;
-      if (normal_in_camera_[e].dot(res.normal) < k.cos_max) continue;
+      if (map_[visible_[e]].normal.dot(normal_in_world) < k.cos_max) continue;
       const float dist = ray.cross(q).squaredNorm();  // |ray x q|^2 orders as the distance
       if (dist < best) {
         best = dist;
@@ -388,7 +393,8 @@ SurfelCounts SurfelFusion::Counts() const {
 
 size_t SurfelFusion::MemoryBytes() const {
   return map_.surfels().capacity() * sizeof(Surfel) + index_map_.capacity() * sizeof(uint64_t) +
-         (in_camera_.capacity() + normal_in_camera_.capacity()) * sizeof(Eigen::Vector3f) +
+         in_camera_.capacity() * sizeof(Eigen::Vector3f) +
+         results_.capacity() * sizeof(PixelResult) +
          (pixel_of_.capacity() + visible_.capacity()) * sizeof(int32_t) +
          chunks_.capacity() * sizeof(Chunk);
 }

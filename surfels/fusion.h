@@ -120,7 +120,15 @@ class SurfelFusion {
 
  private:
   struct Measurement;
-  struct PixelResult;
+  // One measured pixel after association.
+  struct PixelResult {
+    int match = -1;  // surfel index, -1 none
+    bool valid = false;
+    Eigen::Vector3f point, normal;  // camera frame
+    float radius = 0, weight = 0;
+    uint8_t red = 0, green = 0, blue = 0;
+    DepthSource source = DepthSource::kSensor;
+  };
   struct StepConstants;
   FusionStats Fuse(const Measurement& m);
   // A measured pixel's vertex, normal, radius, weight and colour (false: not measurable there).
@@ -150,16 +158,18 @@ class SurfelFusion {
   Camera camera_;
   FusionOptions options_;
   cv::Mat rays_;  // CV_32FC2: each pixel's ray (x/z, y/z), lens distortion removed
+  cv::Mat radial_weight_;  // CV_32F: each pixel's weight by its distance from the image centre
   SurfelMap map_;
   int frame_ = 0;  // time steps (sensor frames) so far
   int fills_ = 0;  // fills fused so far (their pixel grid offset alternates too)
   // Per fusion step: the surfels of the chunks in view (entries: visible_ holds their map index),
-  // with their position and normal in the camera and their pixel (y * width + x, -1 when not in
+  // with their position in the camera and their pixel (y * width + x, -1 when not in
   // the image), and the projected index map (nearest entry per pixel, packed depth and entry).
   std::vector<uint32_t> visible_;
-  std::vector<Eigen::Vector3f> in_camera_, normal_in_camera_;
+  std::vector<Eigen::Vector3f> in_camera_;
   std::vector<int32_t> pixel_of_;
   std::vector<uint64_t> index_map_;
+  std::vector<PixelResult> results_;  // per measured pixel of the step
 };
 
 }  // namespace gf

@@ -69,7 +69,6 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   }
   visible_.resize(entries);
   in_camera_.resize(entries);
-  normal_in_camera_.resize(entries);
   pixel_of_.assign(entries, -1);
   const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
@@ -94,7 +93,6 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
         if (s.removed()) continue;
         const Eigen::Vector3f q = r * s.position + t;
         in_camera_[e] = q;
-        normal_in_camera_[e] = r * s.normal;
         if (q.z() < near) continue;
         const float a = q.x() / q.z(), b = q.y() / q.z(), r2 = a * a + b * b;
         const float radial = 1.f + r2 * (k1 + r2 * (k2 + r2 * k3));

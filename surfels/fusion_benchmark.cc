@@ -1,0 +1,87 @@
+// Surfel fusion of 640x480 frames: `build/surfels/surfels_fusion_benchmark`.
+// Real TUM frames (tum_fr1_xyz_head, at their ground-truth poses) when ../shared/datasets is
+// present. Args: threads (cv::setNumThreads) and extra surfels already in the map, out of view
+// (copies of the map's stable surfels moved 50 m along x), so the cost of a large map shows.
+// For instruction counts that do not depend on the machine's load:
+//   valgrind --tool=callgrind build/surfels/surfels_fusion_benchmark --benchmark_min_time=1x
+#include <benchmark/benchmark.h>
+
+#include <opencv2/core/utility.hpp>
+
+#include "acquisition/frame_source.h"
+#include "acquisition/trajectory.h"
+#include "surfels/fusion.h"
+
+namespace {
+
+constexpr int kFrames = 40;      // read from the capture
+constexpr int kWarmUpFrames = 30;  // fused before timing: a map in its steady state
+
+struct Capture {
+  std::vector<gf::RgbdFrame> frames;
+  std::vector<gf::SE3> poses;
+  gf::Camera camera;
+};
+
+// The first kFrames frames with the ground-truth pose nearest each (empty when absent).
+const Capture& LoadCapture() {
+  static const Capture capture = [] {
+    Capture c;
+    const std::string folder = std::string(GF_SHARED_DATASETS) + "/tum_fr1_xyz_head";
+    try {
+      auto source = gf::OpenFrameSource(folder, {});
+      const gf::Trajectory truth = gf::ReadTrajectory(folder + "/groundtruth.txt");
+      c.camera = source->camera();
+      gf::RgbdFrame frame;
+      while (static_cast<int>(c.frames.size()) < kFrames && source->Next(&frame)) {
+        const gf::StampedPose* nearest = &truth.front();
+        for (const gf::StampedPose& p : truth)
+          if (std::abs(p.timestamp - frame.timestamp) <
+              std::abs(nearest->timestamp - frame.timestamp))
+            nearest = &p;
+        c.poses.push_back(nearest->world_from_camera);
+        c.frames.push_back(frame);
+      }
+    } catch (const std::exception&) {
+      c.frames.clear();
+    }
+    return c;
+  }();
+  return capture;
+}
+
+void BM_FuseFrame(benchmark::State& state) {
+  const Capture& c = LoadCapture();
+  if (c.frames.empty()) {
+    state.SkipWithError("tum_fr1_xyz_head not found under GF_SHARED_DATASETS");
+    return;
+  }
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(static_cast<int>(state.range(0)));
+  gf::SurfelFusion fusion(c.camera, {});
+  for (int i = 0; i < kWarmUpFrames; ++i) fusion.FuseFrame(c.frames[i], c.poses[i], 0);
+  // Stable ones only: unstable copies would be culled as stale at once.
+  const std::vector<gf::Surfel> built = fusion.StableSurfels();
+  std::vector<gf::Surfel> copies;
+  for (int k = 1; copies.size() < static_cast<size_t>(state.range(1)); ++k)
+    for (gf::Surfel s : built) {
+      s.position.x() += 50.f * k;
+      copies.push_back(s);
+    }
+  fusion.AddSurfels(copies);
+  int i = kWarmUpFrames;
+  for (auto _ : state) {
+    fusion.FuseFrame(c.frames[i], c.poses[i], 0);
+    if (++i == kFrames) i = kWarmUpFrames;
+  }
+  state.counters["surfels"] = static_cast<double>(fusion.map().live());
+  cv::setNumThreads(threads);
+}
+BENCHMARK(BM_FuseFrame)
+    ->ArgsProduct({{1, 2}, {0, 1000000}})
+    ->ArgNames({"threads", "extra_surfels"})
+    ->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
