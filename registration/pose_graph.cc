@@ -1,0 +1,190 @@
+#include "registration/pose_graph.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+
+#include "acquisition/errors.h"
+#include "registration/pose_graph_cost.h"
+
+namespace gf {
+
+const char* EdgeKindName(PoseGraphEdge::Kind kind) {
+  switch (kind) {
+    case PoseGraphEdge::Kind::kOdometry:
+      return "odometry";
+    case PoseGraphEdge::Kind::kLoop:
+      return "loop";
+    case PoseGraphEdge::Kind::kRelocalisation:
+      return "relocalisation";
+    case PoseGraphEdge::Kind::kGap:
+      return "gap";
+  }
+  return "unknown";
+}
+
+bool PoseGraphOptions::Check(std::string* message) const {
+  if (!(max_loop_chi2 > 0) || !(loop_huber > 0) || max_iterations < 1 || max_rejections < 0) {
+    if (message)
+      *message = "pose graph: need max_loop_chi2 > 0, loop_huber > 0, max_iterations >= 1, "
+                 "max_rejections >= 0";
+    return false;
+  }
+  return true;
+}
+
+std::string PoseGraphSummary::BriefReport() const {
+  char buffer[240];
+  std::snprintf(buffer, sizeof(buffer),
+                "pose graph %s (%s): %d nodes, %d edges (%d loops), %d solves, %d iterations, "
+                "cost %.4g -> %.4g, %d loops rejected, %.1f ms",
+                success ? "ok" : "failed", termination.c_str(), nodes, edges, loop_edges, solves,
+                iterations, initial_cost, final_cost, rejected, ms);
+  return buffer;
+}
+
+Matrix6d InformationWithFloor(const Matrix6d& alignment_information, double sigma_m,
+                              double sigma_rad) {
+  // Covariance of the alignment: the pseudo-inverse of its information, with directions of
+  // (numerically) no information left at a variance far beyond any scene (1e6: a kilometre).
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(0.5 *
+                                                      (alignment_information +
+                                                       alignment_information.transpose()));
+  Eigen::Matrix<double, 6, 1> variances;
+  for (int i = 0; i < 6; ++i) {
+    const double lambda = eigen.eigenvalues()(i);
+    variances(i) = lambda > 1e-6 ? std::min(1.0 / lambda, 1e6) : 1e6;
+  }
+  Matrix6d covariance =
+      eigen.eigenvectors() * variances.asDiagonal() * eigen.eigenvectors().transpose();
+  for (int i = 0; i < 3; ++i) {
+    covariance(i, i) += sigma_m * sigma_m;
+    covariance(i + 3, i + 3) += sigma_rad * sigma_rad;
+  }
+  const Matrix6d information = covariance.inverse();
+  return 0.5 * (information + information.transpose());
+}
+
+void PoseGraph::AddNode(int id, const SE3& world_from_node) { poses_[id] = world_from_node; }
+
+void PoseGraph::AddEdge(const PoseGraphEdge& edge) {
+  GF_CHECK(HasNode(edge.from) && HasNode(edge.to) && edge.from != edge.to,
+           "a pose-graph edge needs two distinct existing nodes");
+  GF_CHECK(edge.information.allFinite(), "a pose-graph edge needs a finite information matrix");
+  edges_.push_back(edge);
+}
+
+const SE3& PoseGraph::pose(int id) const {
+  const auto it = poses_.find(id);
+  GF_CHECK(it != poses_.end(), "no such pose-graph node");
+  return it->second;
+}
+
+void PoseGraph::SetPose(int id, const SE3& world_from_node) {
+  GF_CHECK(HasNode(id), "no such pose-graph node");
+  poses_[id] = world_from_node;
+}
+
+double PoseGraph::Chi2(const PoseGraphEdge& edge) const {
+  const RelativePoseError cost(edge.from_from_to, edge.information);
+  const SE3& a = pose(edge.from);
+  const SE3& b = pose(edge.to);
+  const Eigen::Vector4d qa = a.rotation().coeffs(), qb = b.rotation().coeffs();
+  Eigen::Matrix<double, 6, 1> r;
+  cost(qa.data(), a.translation().data(), qb.data(), b.translation().data(), r.data());
+  return r.squaredNorm();
+}
+
+PoseGraphSummary PoseGraph::Solve(const PoseGraphOptions& options, std::map<int, Block>* blocks) {
+  ceres::Problem problem;
+  for (auto& [id, block] : *blocks) {
+    problem.AddParameterBlock(block.q, 4, new ceres::EigenQuaternionManifold);
+    problem.AddParameterBlock(block.t, 3);
+  }
+  PoseGraphSummary s;
+  for (const PoseGraphEdge& e : edges_) {
+    if (e.rejected) continue;
+    const bool loop = e.kind == PoseGraphEdge::Kind::kLoop;
+    ceres::LossFunction* loss = loop ? new ceres::HuberLoss(options.loop_huber) : nullptr;
+    Block& a = blocks->at(e.from);
+    Block& b = blocks->at(e.to);
+    problem.AddResidualBlock(RelativePoseError::Create(e.from_from_to, e.information), loss, a.q,
+                             a.t, b.q, b.t);
+    ++s.edges;
+    s.loop_edges += loop;
+  }
+  Block& first = blocks->begin()->second;
+  problem.SetParameterBlockConstant(first.q);
+  problem.SetParameterBlockConstant(first.t);
+  ceres::Solver::Options solver;
+  solver.max_num_iterations = options.max_iterations;
+  solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  solver.num_threads = 1;  // algorithms own no threads
+  solver.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  s.success = summary.IsSolutionUsable();
+  s.termination = summary.message;
+  s.iterations = static_cast<int>(summary.iterations.size());
+  s.initial_cost = summary.initial_cost;
+  s.final_cost = summary.final_cost;
+  return s;
+}
+
+PoseGraphSummary PoseGraph::Optimize(const PoseGraphOptions& options) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+  const auto start = std::chrono::steady_clock::now();
+  PoseGraphSummary total;
+  total.nodes = static_cast<int>(poses_.size());
+  if (poses_.size() < 2 || edges_.empty()) {
+    total.success = true;
+    total.termination = "nothing to optimise";
+    return total;
+  }
+  // Each solve starts from the estimates before this call, so a rejected edge leaves no trace.
+  const std::map<int, SE3> initial = poses_;
+  for (int round = 0;; ++round) {
+    std::map<int, Block> blocks;
+    poses_ = initial;
+    for (const auto& [id, pose] : poses_) {
+      Block& b = blocks[id];
+      Eigen::Map<Eigen::Vector4d>(b.q) = pose.rotation().coeffs();
+      Eigen::Map<Eigen::Vector3d>(b.t) = pose.translation();
+    }
+    const PoseGraphSummary s = Solve(options, &blocks);
+    if (round == 0) total.initial_cost = s.initial_cost;
+    total.final_cost = s.final_cost;
+    total.iterations += s.iterations;
+    total.edges = s.edges;
+    total.loop_edges = s.loop_edges;
+    total.termination = s.termination;
+    ++total.solves;
+    if (!s.success) return total;  // estimates unchanged
+    for (const auto& [id, b] : blocks)
+      poses_[id] = SE3(Eigen::Quaterniond(b.q[3], b.q[0], b.q[1], b.q[2]),
+                       Eigen::Vector3d(b.t[0], b.t[1], b.t[2]));
+    // The least plausible loop edge beyond the test is rejected, and the graph solved again.
+    PoseGraphEdge* worst = nullptr;
+    for (PoseGraphEdge& e : edges_) {
+      if (e.rejected) continue;
+      e.chi2 = Chi2(e);
+      if (e.kind == PoseGraphEdge::Kind::kLoop && e.chi2 > options.max_loop_chi2 &&
+          (!worst || e.chi2 > worst->chi2))
+        worst = &e;
+    }
+    total.success = true;
+    if (!worst || round >= options.max_rejections) break;
+    worst->rejected = true;
+    ++total.rejected;
+  }
+  total.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                 .count();
+  return total;
+}
+
+}  // namespace gf

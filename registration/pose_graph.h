@@ -1,0 +1,108 @@
+// A pose graph of keyframes, optimised with Ceres: the back end of loop closure.
+//
+// Nodes are keyframe poses world_from_keyframe (a unit quaternion on Ceres' EigenQuaternionManifold
+// and a translation). An edge is a measured relative pose from_from_to (the alignment of keyframe
+// `to` against keyframe `from`) with the information matrix of that alignment, for a perturbation
+// applied on the left, xi = [rho; phi] (metres, radians):
+//   measured = exp(xi) * true,  xi ~ N(0, information^-1).
+// Its residual is the left error of the estimate, E = (world_from_from^-1 world_from_to)
+// measured^-1, as [translation of E; 2 vec(quaternion of E)] (= log E to first order), whitened
+// by the square root of the information. Odometry edges enter as they are; loop edges through a
+// Huber loss. After optimising, loop edges whose whitened squared residual exceeds
+// max_loop_chi2 (3 sigma of a chi-square with 6 degrees of freedom: 20.06) are implausible
+// (RTAB-Map's rule); the worst is rejected and the graph re-optimised, until none remains.
+// The first node is held fixed (the world frame is the first keyframe's).
+//
+// No threads, no I/O. Usage:
+//   gf::PoseGraph graph;
+//   graph.AddNode(0, gf::SE3());
+//   graph.AddNode(1, world_from_1);
+//   graph.AddEdge({0, 1, kf0_from_kf1, information, gf::PoseGraphEdge::Kind::kOdometry});
+//   gf::PoseGraphSummary s = graph.Optimize({});
+//   gf::SE3 corrected = graph.pose(1);
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "acquisition/se3.h"
+
+namespace gf {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+struct PoseGraphEdge {
+  enum class Kind {
+    kOdometry,        // consecutive keyframes, from tracking
+    kLoop,            // a verified loop closure
+    kRelocalisation,  // tracking lost, then found again against an earlier keyframe
+    kGap,             // tracking lost and restarted at the last good pose: a weak guess
+  };
+  int from = 0, to = 0;  // node ids
+  SE3 from_from_to;      // measured pose of `to` in `from`'s frame
+  Matrix6d information = Matrix6d::Identity();  // of a left perturbation [rho; phi]
+  Kind kind = Kind::kOdometry;
+  bool rejected = false;  // by the graph's plausibility test (loop edges only)
+  double chi2 = 0;        // whitened squared residual after the last optimisation
+};
+const char* EdgeKindName(PoseGraphEdge::Kind kind);
+
+struct PoseGraphOptions {
+  // A loop edge whose whitened squared residual exceeds this after optimising is rejected (the
+  // chi-square distribution with 6 degrees of freedom stays below 20.06 with 99.73% probability).
+  double max_loop_chi2 = 20.06;
+  // Loop edges are robustified by a Huber loss of this scale, in whitened units (sigmas).
+  double loop_huber = 3.0;
+  int max_iterations = 100;      // Levenberg-Marquardt iterations per solve
+  int max_rejections = 10;       // loop edges rejected (and re-solves) per Optimize() at most
+  bool Check(std::string* message = nullptr) const;
+};
+
+struct PoseGraphSummary {
+  bool success = false;
+  std::string termination;  // Ceres' message, or why it was not run
+  int nodes = 0, edges = 0, loop_edges = 0;
+  int solves = 0, iterations = 0;
+  int rejected = 0;  // loop edges rejected by this call
+  double initial_cost = 0, final_cost = 0;
+  double ms = 0;
+  std::string BriefReport() const;
+};
+
+// The information of an alignment whose own information (J^T W J of its whitened residuals) is
+// `alignment_information`, with the errors its residual model leaves out added to its covariance:
+// sigma_m (metres) on each translation axis and sigma_rad (radians) on each rotation axis.
+// Directions the alignment does not constrain (near-zero eigenvalues) stay unconstrained.
+Matrix6d InformationWithFloor(const Matrix6d& alignment_information, double sigma_m,
+                              double sigma_rad);
+
+class PoseGraph {
+ public:
+  // Adds a node with its initial estimate (ids need not be dense); re-adding replaces the estimate.
+  void AddNode(int id, const SE3& world_from_node);
+  // Both nodes must exist (throws std::logic_error otherwise).
+  void AddEdge(const PoseGraphEdge& edge);
+  bool HasNode(int id) const { return poses_.count(id) != 0; }
+  const SE3& pose(int id) const;
+  void SetPose(int id, const SE3& world_from_node);
+  const std::map<int, SE3>& poses() const { return poses_; }
+  const std::vector<PoseGraphEdge>& edges() const { return edges_; }
+  // Solves from the current estimates; the first node (smallest id) stays fixed.
+  PoseGraphSummary Optimize(const PoseGraphOptions& options);
+  // Whitened squared residual of an edge at the current estimates.
+  double Chi2(const PoseGraphEdge& edge) const;
+
+ private:
+  // Ceres parameter blocks: quaternion (x, y, z, w) and translation per node.
+  struct Block {
+    double q[4];
+    double t[3];
+  };
+  PoseGraphSummary Solve(const PoseGraphOptions& options, std::map<int, Block>* blocks);
+  std::map<int, SE3> poses_;
+  std::vector<PoseGraphEdge> edges_;
+};
+
+}  // namespace gf
