@@ -26,6 +26,10 @@ bool TrackerOptions::Check(std::string* message) const {
     if (message) *message = "max_jump_m and max_jump_deg must be positive";
     return false;
   }
+  if (relocalise_frames < 0) {
+    if (message) *message = "relocalise_frames must be >= 0";
+    return false;
+  }
   if (!(restart_m > 0) || !(restart_deg > 0)) {
     if (message) *message = "restart_m and restart_deg must be positive";
     return false;
@@ -42,6 +46,10 @@ const char* TrackingStatusName(TrackingStatus status) {
       return "tracking";
     case TrackingStatus::kLost:
       return "lost";
+    case TrackingStatus::kRelocalised:
+      return "relocalised";
+    case TrackingStatus::kRestarted:
+      return "restarted";
   }
   return "unknown";
 }
@@ -59,26 +67,6 @@ FrameToKeyframeTracker::FrameToKeyframeTracker(const Camera& camera, const Track
   GF_CHECK(options_.Check(&problem), problem);
 }
 
-FrameToKeyframeTracker::Features FrameToKeyframeTracker::ExtractFeatures(
-    const RgbdFrame& frame) const {
-  Features f;
-  if (!options_.use_features || frame.color.empty()) return f;
-  cv::Mat gray;
-  cv::cvtColor(frame.color, gray, cv::COLOR_BGR2GRAY);
-  SurfFeatures surf = DetectAndDescribeSurf(gray, options_.surf);
-  f.keypoints = std::move(surf.keypoints);
-  f.descriptors = surf.descriptors;
-  for (const cv::KeyPoint& k : f.keypoints) {
-    const int u = static_cast<int>(std::lround(k.pt.x)), v = static_cast<int>(std::lround(k.pt.y));
-    const float z = (u >= 0 && v >= 0 && u < frame.depth.cols && v < frame.depth.rows)
-                        ? frame.depth.at<float>(v, u)
-                        : 0.f;
-    f.points.push_back(z > 0 ? camera_.BackProject({k.pt.x, k.pt.y}, z)
-                             : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
-  }
-  return f;
-}
-
 void FrameToKeyframeTracker::SetModelReference(const cv::Mat& depth,
                                                const SE3& world_from_reference) {
   GF_CHECK(depth.type() == CV_32FC1 && depth.cols == camera_.width && depth.rows == camera_.height,
@@ -87,100 +75,159 @@ void FrameToKeyframeTracker::SetModelReference(const cv::Mat& depth,
   world_from_model_ = world_from_reference;
 }
 
-TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& frame) {
-  TrackingResult result;
-  const DepthPyramid model = std::move(model_);  // for this frame only
-  model_ = DepthPyramid();
-  DepthPyramid current = BuildDepthPyramid(frame.depth, camera_, options_.pyramid_levels);
-  Features features = ExtractFeatures(frame);
-  if (!initialized_) {
-    initialized_ = true;
-    keyframe_features_ = std::move(features);
-    keyframe_ = std::move(current);
-    world_from_keyframe_ = world_from_previous_ = SE3();
-    velocity_ = SE3();
-    ++keyframes_;
-    result.status = TrackingStatus::kInitialized;
-    result.new_keyframe = true;
-    result.overlap = 1.0;
-    return result;
-  }
-  const SE3 predicted = world_from_previous_ * (options_.constant_velocity ? velocity_ : SE3());
-  SE3 keyframe_from_predicted = world_from_keyframe_.Inverse() * predicted;
+bool FrameToKeyframeTracker::AlignToKeyframe(const DepthPyramid& current,
+                                             const FrameFeatures& features,
+                                             SE3 keyframe_from_predicted,
+                                             TrackingResult* result) const {
+  const SE3 prediction = keyframe_from_predicted;
   std::vector<FeatureCorrespondence> correspondences;
-  if (!features.keypoints.empty() && !keyframe_features_.keypoints.empty()) {
-    const std::vector<cv::DMatch> matches =
-        MatchDescriptors(features.keypoints, features.descriptors, keyframe_features_.keypoints,
-                         keyframe_features_.descriptors, options_.match);
+  const FrameFeatures& key = *keyframe_features_;
+  if (!features.empty() && !key.empty()) {
+    const std::vector<cv::DMatch> matches = MatchDescriptors(
+        features.keypoints, features.descriptors, key.keypoints, key.descriptors, options_.match);
     std::vector<Eigen::Vector3d> source, target;
     std::vector<const cv::DMatch*> used;
     for (const cv::DMatch& m : matches) {
       const Eigen::Vector3d& p = features.points[m.queryIdx];
-      const Eigen::Vector3d& q = keyframe_features_.points[m.trainIdx];
+      const Eigen::Vector3d& q = key.points[m.trainIdx];
       if (!p.allFinite() || !q.allFinite()) continue;
       source.push_back(p);
       target.push_back(q);
       used.push_back(&m);
     }
-    result.ransac = EstimateRigidRansac(source, target, options_.ransac);
-    if (result.ransac.success) {
-      for (int i : result.ransac.inlier_indices) {
-        const cv::KeyPoint& k = keyframe_features_.keypoints[used[i]->trainIdx];
+    result->ransac = EstimateRigidRansac(source, target, options_.ransac);
+    if (result->ransac.success) {
+      for (int i : result->ransac.inlier_indices) {
+        const cv::KeyPoint& k = key.keypoints[used[i]->trainIdx];
         correspondences.push_back({source[i], Eigen::Vector2d(k.pt.x, k.pt.y)});
       }
-      const SE3 disagreement = keyframe_from_predicted.Inverse() * result.ransac.target_from_source;
+      const SE3 disagreement = prediction.Inverse() * result->ransac.target_from_source;
       if (disagreement.TranslationNorm() > options_.restart_m ||
           disagreement.RotationAngle() * 180.0 / M_PI > options_.restart_deg)
-        keyframe_from_predicted = result.ransac.target_from_source;
+        keyframe_from_predicted = result->ransac.target_from_source;
     }
   }
-  result.icp =
+  result->icp =
       AlignPointToPlane(keyframe_, current, keyframe_from_predicted, options_.icp, correspondences);
-  result.overlap = result.icp.valid_points ? static_cast<double>(result.icp.overlapping_points) /
-                                                 result.icp.valid_points
-                                           : 0.0;
-  const SE3 correction = keyframe_from_predicted.Inverse() * result.icp.reference_from_current;
+  result->overlap = result->icp.valid_points ? static_cast<double>(result->icp.overlapping_points) /
+                                                   result->icp.valid_points
+                                             : 0.0;
+  const SE3 correction = keyframe_from_predicted.Inverse() * result->icp.reference_from_current;
   const bool jumped = correction.TranslationNorm() > options_.max_jump_m ||
                       correction.RotationAngle() * 180.0 / M_PI > options_.max_jump_deg;
-  if (!result.icp.success || jumped) {
-    // Lost: keep the last good pose, restart from this frame as a keyframe there.
-    result.status = TrackingStatus::kLost;
-    result.world_from_camera = world_from_previous_;
-    keyframe_ = std::move(current);
-    keyframe_features_ = std::move(features);
-    world_from_keyframe_ = world_from_previous_;
+  return result->icp.success && !jumped;
+}
+
+void FrameToKeyframeTracker::MakeKeyframe(DepthPyramid current, FeaturesPtr features,
+                                          const SE3& world_from_camera) {
+  keyframe_ = std::move(current);
+  keyframe_features_ = std::move(features);
+  world_from_keyframe_ = world_from_camera;
+  ++keyframes_;
+}
+
+TrackingResult FrameToKeyframeTracker::TrackWhileLost(const RgbdFrame& frame,
+                                                      DepthPyramid current, FeaturesPtr features,
+                                                      TrackingResult result) {
+  // The last keyframe again, from the last good pose (a passing failure: blur, a covered lens).
+  const SE3 keyframe_from_last = world_from_keyframe_.Inverse() * world_from_previous_;
+  if (AlignToKeyframe(current, *features, keyframe_from_last, &result)) {
+    result.status = TrackingStatus::kTracking;
+    result.world_from_camera = world_from_keyframe_ * result.icp.reference_from_current;
+    lost_frames_ = 0;
     velocity_ = SE3();
-    ++keyframes_;
-    result.new_keyframe = true;
+    world_from_previous_ = result.world_from_camera;
+    if (NeedsKeyframe(frame, result)) {
+      MakeKeyframe(std::move(current), std::move(features), result.world_from_camera);
+      result.new_keyframe = true;
+    }
     return result;
   }
-  result.status = TrackingStatus::kTracking;
-  SE3 keyframe_from_current = result.icp.reference_from_current;
-  result.world_from_camera = world_from_keyframe_ * keyframe_from_current;
-  if (!model.depth.empty()) {
-    // Refine against the model, which has fused every earlier frame (less drift than one keyframe).
-    const SE3 model_from_current = world_from_model_.Inverse() * result.world_from_camera;
-    const IcpSummary refined = AlignPointToPlane(model, current, model_from_current, options_.icp);
-    const SE3 step = model_from_current.Inverse() * refined.reference_from_current;
-    if (refined.success && step.TranslationNorm() <= options_.max_jump_m &&
-        step.RotationAngle() * 180.0 / M_PI <= options_.max_jump_deg) {
-      result.world_from_camera = world_from_model_ * refined.reference_from_current;
-      keyframe_from_current = world_from_keyframe_.Inverse() * result.world_from_camera;
-      result.model_refined = true;
+  if (relocaliser_ != nullptr) {
+    std::optional<Relocalisation> found = relocaliser_->Relocalise(frame, *features);
+    if (found) {
+      result.status = TrackingStatus::kRelocalised;
+      result.world_from_camera = found->world_from_camera;
+      result.relocalisation = std::move(found);
+      lost_frames_ = 0;
+      velocity_ = SE3();
+      world_from_previous_ = result.world_from_camera;
+      MakeKeyframe(std::move(current), std::move(features), result.world_from_camera);
+      result.new_keyframe = true;
+      return result;
     }
   }
-  velocity_ = world_from_previous_.Inverse() * result.world_from_camera;
-  world_from_previous_ = result.world_from_camera;
+  result.status = TrackingStatus::kLost;
+  result.world_from_camera = world_from_previous_;
+  if (relocaliser_ == nullptr || ++lost_frames_ > options_.relocalise_frames) {
+    // Restart here, at the last good pose: the new keyframe's pose is a guess.
+    result.status = TrackingStatus::kRestarted;
+    lost_frames_ = 0;
+    velocity_ = SE3();
+    MakeKeyframe(std::move(current), std::move(features), world_from_previous_);
+    result.new_keyframe = true;
+  }
+  return result;
+}
+
+void FrameToKeyframeTracker::RefineAgainstModel(const DepthPyramid& model,
+                                                const DepthPyramid& current,
+                                                TrackingResult* result) const {
+  // The model has fused every earlier frame (less drift than one keyframe).
+  const SE3 model_from_current = world_from_model_.Inverse() * result->world_from_camera;
+  const IcpSummary refined = AlignPointToPlane(model, current, model_from_current, options_.icp);
+  const SE3 step = model_from_current.Inverse() * refined.reference_from_current;
+  if (refined.success && step.TranslationNorm() <= options_.max_jump_m &&
+      step.RotationAngle() * 180.0 / M_PI <= options_.max_jump_deg) {
+    result->world_from_camera = world_from_model_ * refined.reference_from_current;
+    result->model_refined = true;
+  }
+}
+
+bool FrameToKeyframeTracker::NeedsKeyframe(const RgbdFrame& frame,
+                                           const TrackingResult& result) const {
   const KeyframePolicy& k = options_.keyframes;
+  const SE3 keyframe_from_current = world_from_keyframe_.Inverse() * result.world_from_camera;
   const bool few_features = options_.use_features && !frame.color.empty() &&
                             result.ransac.inliers < k.min_feature_inliers;
-  if (keyframe_from_current.RotationAngle() * 180.0 / M_PI > k.max_rotation_deg ||
-      keyframe_from_current.TranslationNorm() > k.max_translation_m ||
-      result.overlap < k.min_overlap || few_features) {
-    keyframe_ = std::move(current);
-    keyframe_features_ = std::move(features);
-    world_from_keyframe_ = result.world_from_camera;
-    ++keyframes_;
+  return keyframe_from_current.RotationAngle() * 180.0 / M_PI > k.max_rotation_deg ||
+         keyframe_from_current.TranslationNorm() > k.max_translation_m ||
+         result.overlap < k.min_overlap || few_features;
+}
+
+TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& frame) {
+  TrackingResult result;
+  const DepthPyramid model = std::move(model_);  // for this frame only
+  model_ = DepthPyramid();
+  DepthPyramid current = BuildDepthPyramid(frame.depth, camera_, options_.pyramid_levels);
+  auto features = std::make_shared<const FrameFeatures>(
+      options_.use_features ? ExtractFrameFeatures(frame, camera_, options_.surf)
+                            : FrameFeatures());
+  result.features = features;
+  if (!initialized_) {
+    initialized_ = true;
+    MakeKeyframe(std::move(current), std::move(features), SE3());
+    world_from_previous_ = velocity_ = SE3();
+    result.status = TrackingStatus::kInitialized;
+    result.new_keyframe = true;
+    result.overlap = 1.0;
+    return result;
+  }
+  if (lost_frames_ > 0)
+    return TrackWhileLost(frame, std::move(current), std::move(features), std::move(result));
+  const SE3 predicted = world_from_previous_ * (options_.constant_velocity ? velocity_ : SE3());
+  if (!AlignToKeyframe(current, *features, world_from_keyframe_.Inverse() * predicted, &result)) {
+    // Lost: this frame has no pose; the next ones look for it.
+    lost_frames_ = 1;
+    return TrackWhileLost(frame, std::move(current), std::move(features), std::move(result));
+  }
+  result.status = TrackingStatus::kTracking;
+  result.world_from_camera = world_from_keyframe_ * result.icp.reference_from_current;
+  if (!model.depth.empty()) RefineAgainstModel(model, current, &result);
+  velocity_ = world_from_previous_.Inverse() * result.world_from_camera;
+  world_from_previous_ = result.world_from_camera;
+  if (NeedsKeyframe(frame, result)) {
+    MakeKeyframe(std::move(current), std::move(features), result.world_from_camera);
     result.new_keyframe = true;
   }
   return result;

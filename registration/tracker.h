@@ -3,21 +3,31 @@
 //
 // FrameToKeyframeTracker aligns each frame to the current keyframe with AlignPointToPlane, starting
 // from a constant-velocity prediction. A frame becomes the new keyframe when it has moved more than
-// the policy allows from the keyframe or shares too little of it. Tracking loss (ICP failure, too
-// little overlap, an implausible jump) is reported in the result; the pose then stays at the last
-// good one and the frame starts a new keyframe, so the run goes on.
+// the policy allows from the keyframe or shares too little of it.
+//
+// Tracking loss (ICP failure, too little overlap, an implausible jump) is reported in the result,
+// and the frame has no pose. Then each next frame is aligned to the last keyframe again, from the
+// last good pose, and, when a Relocaliser is set (loop closure's keyframe database), looked up
+// among all earlier keyframes; the first that verifies ends the loss (kRelocalised: the frame
+// becomes a keyframe at the pose found). Frames until then are lost, not guessed. When nothing
+// verifies for relocalise_frames frames (or at once, without a Relocaliser), tracking restarts:
+// the frame becomes a keyframe at the last good pose (kRestarted: a guess, reported lost), and the
+// run goes on from there.
 //
 // No threads, no I/O. Usage:
 //   gf::FrameToKeyframeTracker tracker(camera, gf::TrackerOptions{});
 //   for (each frame) { gf::TrackingResult r = tracker.Track(frame); trajectory.push_back(...); }
 #pragma once
 
+#include <memory>
+#include <optional>
 #include <string>
 
 #include "acquisition/camera.h"
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
 #include "registration/depth_pyramid.h"
+#include "registration/frame_features.h"
 #include "registration/icp.h"
 #include "registration/ransac.h"
 #include "registration/surf.h"
@@ -53,20 +63,52 @@ struct TrackerOptions {
   bool constant_velocity = true;  // predict with the last inter-frame motion
   double max_jump_m = 0.15;       // larger correction of the prediction: treated as lost
   double max_jump_deg = 15.0;
+  // After a loss, frames looked up among earlier keyframes (with a Relocaliser) before tracking
+  // restarts at the last good pose.
+  int relocalise_frames = 30;
   bool Check(std::string* message = nullptr) const;
 };
 
-enum class TrackingStatus { kInitialized, kTracking, kLost };
+enum class TrackingStatus {
+  kInitialized,   // the first frame: the world frame
+  kTracking,      // aligned to its keyframe
+  kLost,          // no pose: alignment failed, or the run is still lost
+  kRelocalised,   // found again against an earlier keyframe; a new keyframe
+  kRestarted,     // lost too long: a new keyframe at the last good pose (a guess, no pose)
+};
 const char* TrackingStatusName(TrackingStatus status);
+
+// Where a lost frame was found again (Relocaliser).
+struct Relocalisation {
+  int keyframe = -1;         // the earlier keyframe (loop closure's id) it was aligned to
+  SE3 keyframe_from_camera;  // the alignment
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();  // of it
+  SE3 world_from_camera;     // in the tracker's world frame
+};
+
+// Finds a lost frame among earlier keyframes. Called from the tracking thread; implementations
+// guard what they share with other threads.
+class Relocaliser {
+ public:
+  virtual ~Relocaliser() = default;
+  virtual std::optional<Relocalisation> Relocalise(const RgbdFrame& frame,
+                                                   const FrameFeatures& features) = 0;
+};
 
 struct TrackingResult {
   bool model_refined = false;  // the pose was refined against the model (SetModelReference)
   TrackingStatus status = TrackingStatus::kInitialized;
+  // kInitialized, kTracking, kRelocalised; lost frames carry the last good pose, not theirs.
+  bool has_pose() const {
+    return status != TrackingStatus::kLost && status != TrackingStatus::kRestarted;
+  }
   SE3 world_from_camera;
   bool new_keyframe = false;
   double overlap = 0;   // share of the frame's points that land on the keyframe's surface
   RansacReport ransac;  // feature alignment to the keyframe (empty when features are off)
-  IcpSummary icp;
+  IcpSummary icp;               // alignment to the keyframe
+  std::shared_ptr<const FrameFeatures> features;  // the frame's (empty without colour)
+  std::optional<Relocalisation> relocalisation;   // kRelocalised only
   std::string BriefReport() const;
 };
 
@@ -90,21 +132,31 @@ class FrameToKeyframeTracker : public Tracker {
   // on enough of the model and moves the pose by less than the jump limits. Keyframes (for the
   // stereo fill) are chosen as before.
   void SetModelReference(const cv::Mat& depth, const SE3& world_from_reference);
+  // Looks lost frames up among earlier keyframes (may be null: restart at once). Not owned.
+  void SetRelocaliser(Relocaliser* relocaliser) { relocaliser_ = relocaliser; }
 
  private:
-  // SURF keypoints of a frame with the 3D point under each (NaN where depth is missing).
-  struct Features {
-    std::vector<cv::KeyPoint> keypoints;
-    cv::Mat descriptors;
-    std::vector<Eigen::Vector3d> points;
-  };
-  Features ExtractFeatures(const RgbdFrame& frame) const;
+  using FeaturesPtr = std::shared_ptr<const FrameFeatures>;
+  // Aligns the frame to the keyframe from keyframe_from_predicted (features re-seed it when the
+  // prediction is off); fills result->ransac, icp, overlap. True when ICP succeeded without an
+  // implausible jump from the prediction.
+  bool AlignToKeyframe(const DepthPyramid& current, const FrameFeatures& features,
+                       SE3 keyframe_from_predicted, TrackingResult* result) const;
+  // The frame becomes the keyframe at world_from_camera.
+  void MakeKeyframe(DepthPyramid current, FeaturesPtr features, const SE3& world_from_camera);
+  TrackingResult TrackWhileLost(const RgbdFrame& frame, DepthPyramid current,
+                                FeaturesPtr features, TrackingResult result);
+  void RefineAgainstModel(const DepthPyramid& model, const DepthPyramid& current,
+                          TrackingResult* result) const;
+  bool NeedsKeyframe(const RgbdFrame& frame, const TrackingResult& result) const;
 
   Camera camera_;
   TrackerOptions options_;
+  Relocaliser* relocaliser_ = nullptr;
   bool initialized_ = false;
+  int lost_frames_ = 0;  // frames since tracking was lost (0: tracking)
   DepthPyramid keyframe_;
-  Features keyframe_features_;
+  FeaturesPtr keyframe_features_;
   SE3 world_from_keyframe_;
   SE3 world_from_previous_;
   SE3 velocity_;  // previous_from_current of the last step

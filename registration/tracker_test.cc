@@ -83,15 +83,18 @@ TEST(FrameToKeyframeTracker, ReportsLossKeepsThePoseAndRecovers) {
   TrackingResult last;
   for (int i = 0; i < 3; ++i) last = tracker.Track(SynthDepthFrame(scene, poses[i], i));
   ASSERT_EQ(last.status, TrackingStatus::kTracking);
-  // A frame with no depth at all (lens covered): lost, pose held.
+  // A frame with no depth at all (lens covered): no pose; without a relocaliser tracking restarts
+  // there at once, at the last good pose.
   RgbdFrame blind = SynthDepthFrame(scene, poses[3], 3);
   blind.depth.setTo(0.f);
   const TrackingResult lost = tracker.Track(blind);
-  EXPECT_EQ(lost.status, TrackingStatus::kLost);
+  EXPECT_EQ(lost.status, TrackingStatus::kRestarted);
+  EXPECT_FALSE(lost.has_pose());
+  EXPECT_TRUE(lost.new_keyframe);
   EXPECT_LT((lost.world_from_camera.Matrix() - last.world_from_camera.Matrix()).norm(), 1e-12);
   // The blind frame became the keyframe; the next usable frame restarts from a fresh keyframe.
   const TrackingResult after = tracker.Track(SynthDepthFrame(scene, poses[4], 4));
-  EXPECT_EQ(after.status, TrackingStatus::kLost);
+  EXPECT_FALSE(after.has_pose());
   const TrackingResult again = tracker.Track(SynthDepthFrame(scene, poses[5], 5));
   EXPECT_EQ(again.status, TrackingStatus::kTracking) << again.BriefReport();
 }
