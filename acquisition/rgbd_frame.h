@@ -30,4 +30,9 @@ struct RgbdFrame {
   std::string depth_path;  // where the depth came from (may be empty)
 };
 
+// A frame's name in outputs and logs: its depth timestamp as the input lists it, else its index.
+inline std::string KeyframeName(const RgbdFrame& frame) {
+  return frame.timestamp_text.empty() ? std::to_string(frame.index) : frame.timestamp_text;
+}
+
 }  // namespace gf

@@ -97,6 +97,9 @@ void AddReconstructCommand(CLI::App& app) {
   cmd->add_flag("--no-fill", *no_fill, "no stereo hole filling of keyframes (sensor depth only)");
   auto no_fusion = std::make_shared<bool>(false);
   cmd->add_flag("--no-fusion", *no_fusion, "no surfel map (map.ply)");
+  auto no_loops = std::make_shared<bool>(false);
+  cmd->add_flag("--no-loop-closure", *no_loops,
+                "no loop closure, pose graph or relocalisation (poses as tracked)");
   cmd->add_flag("--mesh", options->mesh,
                 "also mesh.ply: a triangle mesh of the map (PCL greedy projection)");
   cmd->add_flag("--frame-to-model", options->pipeline.frame_to_model,
@@ -114,11 +117,12 @@ void AddReconstructCommand(CLI::App& app) {
                 "refused)");
   cmd->add_flag("--allow-lost", options->allow_lost,
                 "accept a run that loses tracking on most frames (exit 0 with a warning)");
-  cmd->callback([options, args, range, no_fill, no_fusion, sweep_all] {
+  cmd->callback([options, args, range, no_fill, no_fusion, no_loops, sweep_all] {
     if (!options->config_file.empty()) ApplyConfigFile(options->config_file, &options->pipeline);
     if (*sweep_all) options->pipeline.fill_options.stereo.plane_sweep_always = true;
     options->pipeline.fill = !*no_fill;
     options->pipeline.fusion = !*no_fusion;
+    options->pipeline.loop_closure = !*no_loops;
     options->input = args->input;
     options->source = args->ToOptions();
     options->source.load_color = options->pipeline.tracker.use_features || options->pipeline.fill;

@@ -43,9 +43,9 @@ FillStage::~FillStage() {
   worker_.Join();
 }
 
-bool FillStage::Offer(const RgbdFrame& frame, const SE3& world_from_camera) {
-  if (options_.drop_when_busy ? queue_.TryPush({frame, world_from_camera})
-                              : queue_.Push({frame, world_from_camera})) {
+bool FillStage::Offer(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe) {
+  if (options_.drop_when_busy ? queue_.TryPush({frame, world_from_camera, keyframe})
+                              : queue_.Push({frame, world_from_camera, keyframe})) {
     ++accepted_;
     return true;
   }
@@ -80,8 +80,10 @@ void FillStage::Run() {
   } stopped{&stopped_};
   KeyframeFiller filler(camera_, options_.Filler());
   Offered item;
-  while (!cancelled_ && queue_.Pop(&item))
+  while (!cancelled_ && queue_.Pop(&item)) {
+    keyframe_of_.push_back(item.keyframe);  // the filler numbers keyframes as they arrive
     for (const FilledKeyframe& k : filler.Add(item.frame, item.world_from_camera)) Write(k);
+  }
   if (!cancelled_)
     for (const FilledKeyframe& k : filler.Flush([&] { return cancelled_.load(); })) Write(k);
 }
@@ -95,7 +97,13 @@ void FillStage::Write(const FilledKeyframe& k) {
   if (r.carried_pixels + r.corrected_pixels > 0)
     spdlog::debug("fill {}: {}", r.timestamp, k.fill.BriefReport());
   sink_->WriteKeyframe(r.timestamp, k.key->frame, k.fill);  // a write failure stops the stage
-  if (fusion_) fusion_->OfferFill(k, k.key->id);
+  if (fusion_) {
+    const int id = k.key->id;
+    fusion_->OfferFill(k, id >= 0 && id < static_cast<int>(keyframe_of_.size()) &&
+                                  keyframe_of_[id] >= 0
+                              ? keyframe_of_[id]
+                              : id);
+  }
   std::lock_guard<std::mutex> lock(done_mutex_);
   done_.push_back(r);
   ++done_count_;

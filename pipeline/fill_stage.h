@@ -65,7 +65,8 @@ class FillStage {
   FillStage& operator=(const FillStage&) = delete;
 
   // False when the keyframe was dropped (queue full and drop_when_busy, or the stage stopped).
-  bool Offer(const RgbdFrame& frame, const SE3& world_from_camera);
+  // `keyframe` is the tracker's number for it (what the fusion stage corrects poses by).
+  bool Offer(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe = -1);
   // Processes what is queued, pairs the last keyframes, joins the worker. Rethrows a worker error
   // (a keyframe that could not be written). While it waits, `poll` (may be empty) is called
   // every 50 ms; when it returns true the rest is cancelled.
@@ -82,6 +83,7 @@ class FillStage {
   struct Offered {
     RgbdFrame frame;
     SE3 world_from_camera;
+    int keyframe = -1;
   };
   void Run();
   void Write(const FilledKeyframe& k);
@@ -91,6 +93,7 @@ class FillStage {
   RunSink* sink_;
   FusionStage* fusion_;
   BoundedQueue<Offered> queue_;
+  std::vector<int> keyframe_of_;  // the filler's keyframe ids (arrival order) -> the tracker's
   mutable std::mutex done_mutex_;
   std::vector<KeyframeFill> done_;  // written by the worker
   std::atomic<int> done_count_{0};

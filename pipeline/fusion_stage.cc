@@ -62,8 +62,11 @@ json SurfelReport(const SurfelFusion& fusion, const std::vector<json>& over_time
 }
 
 FusionStage::FusionStage(const Camera& camera, const FusionStageOptions& options,
-                         std::vector<Variant> variants)
-    : camera_(camera), options_(options), queue_(options.queue_capacity) {
+                         std::vector<Variant> variants, const PoseCorrections* corrections)
+    : camera_(camera),
+      options_(options),
+      queue_(options.queue_capacity),
+      corrections_(corrections) {
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
   for (Variant& v : variants) {
@@ -128,11 +131,16 @@ void FusionStage::Cancel() {
 void FusionStage::Run() {
   Item item;
   while (!cancelled_ && queue_.Pop(&item)) {
-    for (Map& m : maps_) Fuse(item, &m);
+    if (corrections_ && corrections_->version() != applied_version_) ApplyCorrections();
+    newest_keyframe_ = std::max(newest_keyframe_, item.keyframe);
+    const SE3 world_from_camera =
+        PoseCorrections::Lookup(applied_, item.keyframe) * item.world_from_camera;
+    for (Map& m : maps_) Fuse(item, world_from_camera, &m);
     if (item.fill) continue;
     ++frames_fused_;
     if (options_.predict) {
-      cv::Mat depth = maps_.front().fusion.RenderDepth(item.world_from_camera);
+      // Rendered where the map is; handed back at the tracked pose (tracking's own frame).
+      cv::Mat depth = maps_.front().fusion.RenderDepth(world_from_camera);
       std::lock_guard<std::mutex> lock(prediction_mutex_);
       prediction_depth_ = depth;
       prediction_pose_ = item.world_from_camera;
@@ -140,9 +148,29 @@ void FusionStage::Run() {
       prediction_ready_.notify_all();
     }
   }
+  // The last corrections (loop closure has finished before the queue closes).
+  if (!cancelled_ && corrections_ && corrections_->version() != applied_version_)
+    ApplyCorrections();
   std::lock_guard<std::mutex> lock(prediction_mutex_);
   prediction_closed_ = true;
   prediction_ready_.notify_all();
+}
+
+void FusionStage::ApplyCorrections() {
+  int version = 0;
+  std::map<int, SE3> latest = corrections_->Snapshot(&version);
+  std::vector<SE3> change;
+  for (int k = 0; k <= newest_keyframe_; ++k)
+    change.push_back(PoseCorrections::Lookup(latest, k) *
+                     PoseCorrections::Lookup(applied_, k).Inverse());
+  const auto start = std::chrono::steady_clock::now();
+  for (Map& m : maps_) m.fusion.MoveWithKeyframes(change);
+  applied_ = std::move(latest);
+  applied_version_ = version;
+  ++corrections_applied_;
+  spdlog::debug("fusion: maps moved with {} keyframes' corrections in {:.1f} ms", change.size(),
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                    .count());
 }
 
 bool FusionStage::Prediction(int frames, std::chrono::milliseconds timeout, cv::Mat* depth,
@@ -156,16 +184,16 @@ bool FusionStage::Prediction(int frames, std::chrono::milliseconds timeout, cv::
   return true;
 }
 
-void FusionStage::Fuse(const Item& item, Map* m) {
+void FusionStage::Fuse(const Item& item, const SE3& world_from_camera, Map* m) {
   if (item.fill && !m->variant.fills) return;
   try {
     FusionStats s;
     if (item.fill) {
       s = m->fusion.FuseFill(item.frame, item.filled_depth, item.fill_mask, item.confidence,
-                             DepthSource::kStereo, item.world_from_camera, item.keyframe);
+                             DepthSource::kStereo, world_from_camera, item.keyframe);
       m->fill_ms.push_back(s.ms);
     } else {
-      s = m->fusion.FuseFrame(item.frame, item.world_from_camera, item.keyframe);
+      s = m->fusion.FuseFrame(item.frame, world_from_camera, item.keyframe);
       m->frame_ms.push_back(s.ms);
       if (m->fusion.frames() % options_.count_every == 0) Record(m);
     }
@@ -197,6 +225,7 @@ json FusionStage::Report(size_t index) const {
   r["fill_ms"] = Timing(m.fill_ms);
   r["failed_items"] = m.failed;
   r["dropped_items"] = dropped_.load();
+  r["corrections_applied"] = corrections_applied_;
   return r;
 }
 

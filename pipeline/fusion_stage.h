@@ -10,6 +10,11 @@
 // fills. Finish() drains the queue, joins the thread and writes each variant's map.ply through its
 // sink; Report() gives report.json's "surfels" object for a variant.
 //
+// With loop closure, frames arrive with their tracked poses and keyframes; the stage fuses each
+// at its keyframe's current correction (pose_corrections.h), and when new corrections are
+// published it first moves every surfel with the keyframe it belongs to (ElasticFusion deforms
+// its map; here the map is rigid per keyframe, which is what the pose graph corrects).
+//
 // Failures are contained per item: a frame or fill whose fusion throws is skipped, counted and
 // logged; the run goes on.
 //
@@ -30,6 +35,7 @@
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
 #include "pipeline/bounded_queue.h"
+#include "pipeline/pose_corrections.h"
 #include "pipeline/run_sink.h"
 #include "pipeline/stage_thread.h"
 #include "sfm/keyframe_filler.h"
@@ -56,8 +62,9 @@ class FusionStage {
     bool fills = true;  // fuse the keyframes' fills
     RunSink* sink;      // where its map.ply goes (must outlive the stage)
   };
+  // `corrections` (may be null: poses as tracked) must outlive the stage.
   FusionStage(const Camera& camera, const FusionStageOptions& options,
-              std::vector<Variant> variants);
+              std::vector<Variant> variants, const PoseCorrections* corrections = nullptr);
   ~FusionStage();  // cancels and joins if Finish() was not called
   FusionStage(const FusionStage&) = delete;
   FusionStage& operator=(const FusionStage&) = delete;
@@ -93,7 +100,9 @@ class FusionStage {
   };
   void Offer(Item item);
   void Run();
-  void Fuse(const Item& item, Map* map);
+  void Fuse(const Item& item, const SE3& world_from_camera, Map* map);
+  // Moves the maps by what the corrections changed since they were last applied.
+  void ApplyCorrections();
   void Record(Map* map) const;
 
   Camera camera_;
@@ -109,6 +118,11 @@ class FusionStage {
   bool prediction_closed_ = false;
   cv::Mat prediction_depth_;
   SE3 prediction_pose_;
+  const PoseCorrections* corrections_;
+  std::map<int, SE3> applied_;  // corrections the maps are at (worker thread)
+  int applied_version_ = 0;
+  int newest_keyframe_ = -1;    // of the items fused so far
+  int corrections_applied_ = 0;
   StageThread worker_;
 };
 

@@ -26,7 +26,7 @@ json StageStats(std::vector<double> ms) {
 // report.json (DESIGN.md's keys).
 json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
                 const TrackingRecord& tracking, const FillStage* fill, const FusionStage* fusion,
-                const ReconstructionSummary& summary) {
+                const LoopClosureStage* loop, const ReconstructionSummary& summary) {
   json report;
   report["complete"] = summary.complete;
   if (!summary.complete) report["stopped_because"] = summary.stopped_because;
@@ -39,8 +39,10 @@ json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
                                                            : "frame_to_keyframe_icp"},
       {"stereo_fill", options.fill},
       {"surfel_fusion", options.fusion},
+      {"loop_closure", options.loop_closure},
       {"threads", std::string("reader + tracker") + (options.fill ? " + stereo" : "") +
-                      (options.fusion ? " + fusion" : "")},
+                      (options.fusion ? " + fusion" : "") +
+                      (options.loop_closure ? " + loop closure" : "")},
       {"hardware_concurrency", std::thread::hardware_concurrency()},
       {"file", options.config_file.empty() ? json() : json(options.config_file)},
       {"settings", SettingsToJson(options)}};
@@ -60,9 +62,18 @@ json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
     report["stages"]["fusion"] = f["frame_ms"];
     report["stages"]["fusion_fill"] = f["fill_ms"];
   }
+  if (loop) report["stages"]["loop_closure"] = loop->Report()["keyframe_ms"];
   report["keyframes"] = summary.keyframes;
-  report["tracking"] = {{"lost_frames", summary.lost}};
-  report["loops"] = nullptr;  // loop closure: not built yet
+  constexpr size_t kListed = 1000;  // lost frames named in the report at most
+  report["tracking"] = {
+      {"lost_frames", summary.lost},
+      {"relocalised", tracking.relocalised},
+      {"restarted", tracking.restarted},
+      {"lost", std::vector<std::string>(
+                   tracking.lost_frames.begin(),
+                   tracking.lost_frames.begin() +
+                       static_cast<long>(std::min(kListed, tracking.lost_frames.size())))}};
+  report["loops"] = loop ? loop->Report() : json{{"enabled", false}};
   report["fill"] = fill ? fill->Report() : json();
   report["surfels"] = fusion ? fusion->Report() : json();
   report["warnings"] = summary.warnings;
@@ -91,15 +102,16 @@ bool ReconstructionOptions::Check(std::string* message) const {
     return false;
   }
   return tracker.Check(message) && (!fill || fill_options.Check(message)) &&
-         (!fusion || fusion_options.Check(message));
+         (!fusion || fusion_options.Check(message)) &&
+         (!loop_closure || loop_options.Check(message));
 }
 
 std::string ReconstructionSummary::BriefReport() const {
   char buffer[240];
   std::snprintf(buffer, sizeof(buffer),
-                "%s%d frames in %.1f s (%.1f fps), %d keyframes, %d lost, %ld of %ld keyframe "
-                "hole pixels filled, %ld surfels",
-                complete ? "" : "stopped early: ", frames, seconds, fps, keyframes, lost,
+                "%s%d frames in %.1f s (%.1f fps), %d keyframes, %d lost, %d loops, %ld of %ld "
+                "keyframe hole pixels filled, %ld surfels",
+                complete ? "" : "stopped early: ", frames, seconds, fps, keyframes, lost, loops,
                 filled_pixels, hole_pixels, surfels);
   return buffer;
 }
@@ -107,6 +119,131 @@ std::string ReconstructionSummary::BriefReport() const {
 Reconstruction::Reconstruction(ReconstructionOptions options) : options_(std::move(options)) {
   std::string problem;
   if (!options_.Check(&problem)) throw InputError("settings", problem);
+}
+
+// The stages of one run; destroyed in reverse order (each after those that use it).
+struct Reconstruction::Stages {
+  PoseCorrections corrections;
+  std::unique_ptr<FusionStage> fusion;
+  std::unique_ptr<FillStage> fill;
+  std::unique_ptr<LoopClosureStage> loop;
+  std::unique_ptr<BoundedQueue<FrameItem>> queue;
+  std::unique_ptr<ReadStage> reader;
+  std::unique_ptr<TrackStage> tracker;
+};
+
+namespace {
+
+// The poses tracking gave, moved by the pose graph's corrections of their keyframes.
+Trajectory CorrectedTrajectory(const TrackingRecord& tracking, const PoseCorrections& corrections) {
+  const std::map<int, SE3> c = corrections.Snapshot();
+  Trajectory out = tracking.trajectory;
+  for (size_t i = 0; i < out.size(); ++i)
+    out[i].world_from_camera =
+        PoseCorrections::Lookup(c, tracking.keyframe[i]) * out[i].world_from_camera;
+  return out;
+}
+
+// Runs `finish`, keeping the first error of the run.
+void FinishStage(const std::function<void()>& finish, std::exception_ptr* error) {
+  try {
+    finish();
+  } catch (...) {
+    if (!*error) *error = std::current_exception();
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<Reconstruction::Stages> Reconstruction::MakeStages(FrameSource& source,
+                                                                   RunSink* sink,
+                                                                   RunSink* without_fill,
+                                                                   bool live) const {
+  auto s = std::make_unique<Stages>();
+  const PoseCorrections* corrections = options_.loop_closure ? &s->corrections : nullptr;
+  if (options_.fusion) {
+    FusionStageOptions fusion_options = options_.fusion_options;
+    fusion_options.drop_when_busy = live;
+    fusion_options.predict = options_.frame_to_model;
+    std::vector<FusionStage::Variant> variants{
+        {options_.fill ? "with_fill" : "without_fill", options_.fill, sink}};
+    if (without_fill) variants.push_back({"without_fill", false, without_fill});
+    s->fusion =
+        std::make_unique<FusionStage>(source.camera(), fusion_options, variants, corrections);
+  }
+  if (options_.fill) {
+    FillStageOptions fill_options = options_.fill_options;
+    fill_options.drop_when_busy = live;
+    s->fill = std::make_unique<FillStage>(source.camera(), fill_options, sink, s->fusion.get());
+  }
+  if (options_.loop_closure) {
+    LoopStageOptions loop_options = options_.loop_options;
+    loop_options.drop_when_busy = live;
+    s->loop = std::make_unique<LoopClosureStage>(source.camera(), loop_options, &s->corrections);
+  }
+  s->queue = std::make_unique<BoundedQueue<FrameItem>>(options_.queue_capacity);
+  s->reader = std::make_unique<ReadStage>(&source, options_.first_frame, options_.end_frame,
+                                          s->queue.get());
+  s->tracker = std::make_unique<TrackStage>(
+      source, options_.tracker,
+      options_.camera_file.empty() ? source.Input() : options_.camera_file, s->queue.get(),
+      s->fill.get(), s->fusion.get(), s->loop.get(), options_.frame_to_model);
+  return s;
+}
+
+ReconstructionSummary Reconstruction::Summarise(const FrameSource& source, const Stages& s,
+                                                const std::exception_ptr& error,
+                                                const std::string& stop_reason,
+                                                double seconds) const {
+  const TrackingRecord& tracking = s.tracker->record();
+  ReconstructionSummary summary;
+  summary.complete = !error && stop_reason.empty();
+  summary.stopped_because = error ? Describe(error) : stop_reason;
+  summary.frames = tracking.frames;
+  summary.lost = tracking.lost;
+  summary.keyframes = tracking.keyframes;
+  summary.seconds = seconds;
+  summary.fps = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
+  if (s.fill) {
+    const json f = s.fill->Report();
+    summary.hole_pixels = f["hole_pixels"];
+    summary.filled_pixels = f["filled_pixels"];
+    for (const auto& k : f["failed_keyframes"])
+      summary.warnings.push_back("keyframe " + k["timestamp"].get<std::string>() +
+                                 " not filled: " + k["reason"].get<std::string>());
+  }
+  if (s.fusion) summary.surfels = s.fusion->Report()["count"];
+  if (s.loop) summary.loops = s.loop->Report()["accepted"];
+  summary.most_lost = summary.frames >= 2 && summary.lost > kMostFramesLost * summary.frames;
+  if (summary.most_lost)
+    summary.warnings.push_back("tracking was lost on " + std::to_string(summary.lost) + " of " +
+                               std::to_string(summary.frames) + " frames");
+  summary.report = MakeReport(options_, source, tracking, s.fill.get(), s.fusion.get(),
+                              s.loop.get(), summary);
+  return summary;
+}
+
+void Reconstruction::WriteOutputs(const FrameSource& source, const Stages& s, RunSink* sink,
+                                  RunSink* without_fill, ReconstructionSummary* summary) const {
+  const Trajectory trajectory = CorrectedTrajectory(s.tracker->record(), s.corrections);
+  sink->WriteTrajectory(trajectory);
+  // The camera of the run's images (frames arrive registered to colour; keyframe depth PNGs are
+  // millimetres), for colmap-export and other readers of the run folder.
+  CameraFile run_camera;
+  run_camera.camera = source.camera();
+  run_camera.depth_scale = 1000.0;
+  sink->WriteCamera(run_camera);
+  sink->WriteReport(summary->report);
+  if (!without_fill) return;
+  // The same tracking, fused without the fill: its own map and surfels, no fill.
+  summary->surfels_without_fill = s.fusion->Report(1)["count"];
+  summary->report_without_fill = summary->report;
+  summary->report_without_fill["config"]["stereo_fill"] = false;
+  summary->report_without_fill["fill"] = nullptr;
+  summary->report_without_fill["surfels"] = s.fusion->Report(1);
+  without_fill->WriteTrajectory(trajectory);
+  without_fill->WriteCamera(run_camera);
+  without_fill->WriteReport(summary->report_without_fill);
 }
 
 ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
@@ -123,110 +260,39 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
     progress.total = std::max(0, last - options_.first_frame);
   }
   const bool live = !progress.total.has_value();  // live input: tracking never waits
-  std::unique_ptr<FusionStage> fusion;
-  if (options_.fusion) {
-    FusionStageOptions fusion_options = options_.fusion_options;
-    fusion_options.drop_when_busy = live;
-    fusion_options.predict = options_.frame_to_model;
-    std::vector<FusionStage::Variant> variants{
-        {options_.fill ? "with_fill" : "without_fill", options_.fill, sink}};
-    if (without_fill) variants.push_back({"without_fill", false, without_fill});
-    fusion = std::make_unique<FusionStage>(source.camera(), fusion_options, variants);
-  }
-  std::unique_ptr<FillStage> fill;
-  if (options_.fill) {
-    FillStageOptions fill_options = options_.fill_options;
-    fill_options.drop_when_busy = live;
-    fill = std::make_unique<FillStage>(source.camera(), fill_options, sink, fusion.get());
-  }
-  BoundedQueue<FrameItem> queue(options_.queue_capacity);
-  ReadStage reader(&source, options_.first_frame, options_.end_frame, &queue);
-  TrackStage tracker(source, options_.tracker,
-                     options_.camera_file.empty() ? source.Input() : options_.camera_file, &queue,
-                     fill.get(), fusion.get(), options_.frame_to_model);
+  std::unique_ptr<Stages> s = MakeStages(source, sink, without_fill, live);
   std::string stop_reason;
   // Progress and stop requests, from this thread; true once a stop was asked for.
   auto poll = [&] {
-    progress.frames = tracker.frames();
-    if (fill)
-      progress.keyframes_offered = fill->offered(), progress.keyframes_filled = fill->done();
-    if (fusion) progress.frames_fused = fusion->frames_fused();
+    progress.frames = s->tracker->frames();
+    if (s->fill)
+      progress.keyframes_offered = s->fill->offered(), progress.keyframes_filled = s->fill->done();
+    if (s->loop) progress.keyframes_searched = s->loop->keyframes_done();
+    if (s->fusion) progress.frames_fused = s->fusion->frames_fused();
     if (callbacks.progress) callbacks.progress(progress);
     if (stop_reason.empty() && callbacks.stop) stop_reason = callbacks.stop();
     return !stop_reason.empty();
   };
-  while (!tracker.WaitFor(std::chrono::milliseconds(50)))
+  while (!s->tracker->WaitFor(std::chrono::milliseconds(50)))
     if (poll()) {
-      tracker.Stop();
-      reader.Stop();
+      s->tracker->Stop();
+      s->reader->Stop();
     }
-  reader.Stop();
-  tracker.Join();
-  reader.Join();
+  s->reader->Stop();
+  s->tracker->Join();
+  s->reader->Join();
   progress.tracking_done = true;
-  std::exception_ptr error = tracker.error();
-  if (fill) {
-    // The keyframes tracked before an error are valid: the fill finishes them, unless a stop is
-    // asked for.
-    try {
-      fill->Finish(poll);
-    } catch (...) {
-      if (!error) error = std::current_exception();
-    }
-  }
-  if (fusion) {
-    // The fill has offered its last keyframes: the map fuses what is queued and is written.
-    try {
-      fusion->Finish(poll);
-    } catch (...) {
-      if (!error) error = std::current_exception();
-    }
-  }
-  const TrackingRecord& tracking = tracker.record();
-  if (!error && stop_reason.empty() && tracking.frames == 0)
+  std::exception_ptr error = s->tracker->error();
+  // The keyframes tracked before an error are valid: the fill, loop closure and fusion finish
+  // them, unless a stop is asked for; the fusion last, with the fills and the final corrections.
+  if (s->fill) FinishStage([&] { s->fill->Finish(poll); }, &error);
+  if (s->loop) FinishStage([&] { s->loop->Finish(poll); }, &error);
+  if (s->fusion) FinishStage([&] { s->fusion->Finish(poll); }, &error);
+  if (!error && stop_reason.empty() && s->tracker->record().frames == 0)
     error = std::make_exception_ptr(InputError(source.Input(), "no frames in the selected range"));
-
-  ReconstructionSummary summary;
-  summary.complete = !error && stop_reason.empty();
-  summary.stopped_because = error ? Describe(error) : stop_reason;
-  summary.frames = tracking.frames;
-  summary.lost = tracking.lost;
-  summary.keyframes = tracking.keyframes;
-  summary.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  summary.fps = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
-  if (fill) {
-    const json f = fill->Report();
-    summary.hole_pixels = f["hole_pixels"];
-    summary.filled_pixels = f["filled_pixels"];
-    for (const auto& k : f["failed_keyframes"])
-      summary.warnings.push_back("keyframe " + k["timestamp"].get<std::string>() +
-                                 " not filled: " + k["reason"].get<std::string>());
-  }
-  if (fusion) summary.surfels = fusion->Report()["count"];
-  summary.most_lost = summary.frames >= 2 && summary.lost > kMostFramesLost * summary.frames;
-  if (summary.most_lost)
-    summary.warnings.push_back("tracking was lost on " + std::to_string(summary.lost) + " of " +
-                               std::to_string(summary.frames) + " frames");
-  summary.report = MakeReport(options_, source, tracking, fill.get(), fusion.get(), summary);
-  sink->WriteTrajectory(tracking.trajectory);
-  // The camera of the run's images (frames arrive registered to colour; keyframe depth PNGs are
-  // millimetres), for colmap-export and other readers of the run folder.
-  CameraFile run_camera;
-  run_camera.camera = source.camera();
-  run_camera.depth_scale = 1000.0;
-  sink->WriteCamera(run_camera);
-  sink->WriteReport(summary.report);
-  if (without_fill) {
-    // The same tracking, fused without the fill: its own map and surfels, no fill.
-    summary.surfels_without_fill = fusion->Report(1)["count"];
-    summary.report_without_fill = summary.report;
-    summary.report_without_fill["config"]["stereo_fill"] = false;
-    summary.report_without_fill["fill"] = nullptr;
-    summary.report_without_fill["surfels"] = fusion->Report(1);
-    without_fill->WriteTrajectory(tracking.trajectory);
-    without_fill->WriteCamera(run_camera);
-    without_fill->WriteReport(summary.report_without_fill);
-  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  ReconstructionSummary summary = Summarise(source, *s, error, stop_reason, seconds);
+  WriteOutputs(source, *s, sink, without_fill, &summary);
   poll();
   if (error) std::rethrow_exception(error);
   return summary;

@@ -15,10 +15,16 @@
 //   gf::FolderRunSink sink("run", /*replace=*/false);
 //   gf::ReconstructionSummary s = reconstruction.Run(*source, &sink, callbacks);
 //
+// With loop closure (the default), trajectory.txt and the maps hold the poses corrected by the
+// pose graph at the end of the run; frames whose tracking was lost have no line in trajectory.txt
+// (report.json lists them).
+//
 // Thread-safety: Run() blocks the calling thread, from which every callback is called.
 #pragma once
 
+#include <exception>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -27,6 +33,7 @@
 #include "acquisition/frame_source.h"
 #include "pipeline/fill_stage.h"
 #include "pipeline/fusion_stage.h"
+#include "pipeline/loop_stage.h"
 #include "pipeline/run_sink.h"
 #include "registration/tracker.h"
 
@@ -44,6 +51,8 @@ struct ReconstructionOptions {
   // fusion. Tracking then waits for each frame to be fused before the next.
   bool frame_to_model = false;
   FusionStageOptions fusion_options;
+  bool loop_closure = true;  // loop closure, pose graph and relocalisation
+  LoopStageOptions loop_options;
   // The file an implausible depth scale is blamed on (the camera.json in use); "" = the input.
   std::string camera_file;
   // Written into the report (config.file, input.path), not read.
@@ -56,6 +65,7 @@ struct ReconstructionProgress {
   std::optional<int> total;    // frames expected, when the source knows
   int keyframes_offered = 0;   // handed to the fill
   int keyframes_filled = 0;    // filled and written
+  int keyframes_searched = 0;  // searched for loops
   int frames_fused = 0;        // fused into the surfel map
   bool tracking_done = false;  // the fill and fusion are finishing the last keyframes
 };
@@ -86,6 +96,7 @@ struct ReconstructionSummary {
   nlohmann::ordered_json report;               // report.json as written
   nlohmann::ordered_json report_without_fill;  // ... in the without_fill folder, when there is one
   long surfels_without_fill = 0;
+  int loops = 0;  // loop edges in the optimised pose graph
   std::string BriefReport() const;
 };
 
@@ -102,6 +113,14 @@ class Reconstruction {
                             RunSink* without_fill = nullptr);
 
  private:
+  struct Stages;
+  std::unique_ptr<Stages> MakeStages(FrameSource& source, RunSink* sink, RunSink* without_fill,
+                                     bool live) const;
+  ReconstructionSummary Summarise(const FrameSource& source, const Stages& s,
+                                  const std::exception_ptr& error, const std::string& stop_reason,
+                                  double seconds) const;
+  void WriteOutputs(const FrameSource& source, const Stages& s, RunSink* sink,
+                    RunSink* without_fill, ReconstructionSummary* summary) const;
   ReconstructionOptions options_;
 };
 

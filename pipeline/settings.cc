@@ -20,7 +20,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(KeyframePolicy, max_rotation_deg, max_transla
                                    min_feature_inliers)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(TrackerOptions, pyramid_levels, icp, use_features, surf, match,
                                    ransac, restart_m, restart_deg, keyframes, constant_velocity,
-                                   max_jump_m, max_jump_deg)
+                                   max_jump_m, max_jump_deg, relocalise_frames)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PoseRefinementOptions, reprojection_px, min_inliers,
                                    max_change_m, max_change_deg, photometric)
 // The pair geometry appears once, at fill.geometry (FillStageOptions::Filler copies it).
@@ -56,6 +56,20 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixe
                                    fill_weight, fill_stable_confidence, fill_unstable_frames,
                                    free_space_margin, free_space_penalty, max_neighbour_step,
                                    normal_filter_px, normal_filter_depth_m, normal_baseline_px)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(KeyframeDatabaseOptions, words, vocabulary_keyframes,
+                                   kmeans_iterations)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopVerificationOptions, match, ransac, min_inlier_ratio,
+                                   min_spread_m, icp, min_overlap, max_refine_m, max_refine_deg,
+                                   max_sigma_m, floor_sigma_m, floor_sigma_deg)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopDetectorOptions, recent_keyframes, appearance_candidates,
+                                   min_appearance_score, proximity_candidates, proximity_m,
+                                   proximity_deg, verification, confirm_m, confirm_deg,
+                                   min_consistent)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PoseGraphOptions, max_loop_chi2, loop_huber, max_iterations,
+                                   max_rejections)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopStageOptions, database, detector, graph, queue_capacity,
+                                   odometry_floor_sigma_m, odometry_floor_sigma_deg, gap_sigma_m,
+                                   gap_sigma_deg, relocalise_candidates)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionStageOptions, fusion, queue_capacity, count_every,
                                    fuse_carried)
 
@@ -71,7 +85,8 @@ nlohmann::json SettingsTree(const ReconstructionOptions& o) {
             {"pairs", fill.pairs},
             {"stereo", fill.stereo},
             {"carry", fill.carry}}},
-          {"fusion", o.fusion_options}};
+          {"fusion", o.fusion_options},
+          {"loop_closure", o.loop_options}};
 }
 
 // Checks `given` (the file's tree) against `known` (every setting, current values): same keys,
@@ -129,6 +144,7 @@ void ApplyConfig(const std::string& text, const std::string& path, Reconstructio
     fill.at("stereo").get_to(f.stereo);
     fill.at("carry").get_to(f.carry);
     merged.at("fusion").get_to(o.fusion_options);
+    merged.at("loop_closure").get_to(o.loop_options);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path, std::string("bad setting: ") + e.what());
   }
@@ -144,6 +160,7 @@ void ApplyConfig(const std::string& text, const std::string& path, Reconstructio
   if (!f.carry.Check(&problem)) refuse("fill.carry");
   if (!f.Check(&problem)) refuse("fill");
   if (!o.fusion_options.Check(&problem)) refuse("fusion");
+  if (!o.loop_options.Check(&problem)) refuse("loop_closure");
   *options = o;
 }
 

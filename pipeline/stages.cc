@@ -61,13 +61,15 @@ void ReadStage::Run() {
 
 TrackStage::TrackStage(const FrameSource& source, const TrackerOptions& options,
                        const std::string& camera_file, BoundedQueue<FrameItem>* queue,
-                       FillStage* fill, FusionStage* fusion, bool frame_to_model)
+                       FillStage* fill, FusionStage* fusion, LoopClosureStage* loop,
+                       bool frame_to_model)
     : source_(source),
       options_(options),
       camera_file_(camera_file),
       queue_(queue),
       fill_(fill),
       fusion_(fusion),
+      loop_(loop),
       frame_to_model_(frame_to_model && fusion != nullptr) {
   thread_.Start([this] { Run(); });
 }
@@ -81,6 +83,7 @@ void TrackStage::Stop() { stop_ = true; }
 
 void TrackStage::Run() {
   FrameToKeyframeTracker tracker(source_.camera(), options_);
+  tracker.SetRelocaliser(loop_);
   FrameItem item;
   while (!stop_ && queue_->Pop(&item)) {
     if (item.error) std::rethrow_exception(item.error);
@@ -104,24 +107,60 @@ void TrackStage::Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker) 
   const auto t0 = Clock::now();
   const TrackingResult r = tracker->Track(frame);
   record_.track_ms.push_back(Ms(t0, Clock::now()));
-  if (r.status == TrackingStatus::kLost) {
+  const int keyframe = tracker->keyframes() - 1;  // the one this frame was tracked against
+  record_.relocalised += r.status == TrackingStatus::kRelocalised;
+  record_.restarted += r.status == TrackingStatus::kRestarted;
+  if (r.status != TrackingStatus::kTracking && r.status != TrackingStatus::kInitialized)
+    spdlog::debug("frame {} ({}): {}", frame.index, frame.timestamp_text, r.BriefReport());
+  if (r.new_keyframe) OfferKeyframe(frame, r, keyframe);
+  ++record_.frames;
+  if (!r.has_pose()) {
+    // Lost frames have no pose: not in the trajectory, not fused.
     ++record_.lost;
-    spdlog::debug("frame {} ({}): tracking lost: {}", frame.index, frame.timestamp_text,
-                  r.BriefReport());
+    record_.lost_frames.push_back(KeyframeName(frame));
+    return;
   }
-  if (fill_ && r.new_keyframe && r.status != TrackingStatus::kLost) {
-    if (frame.color.empty())
-      throw InputError(frame.depth_path.empty() ? source_.Input() : frame.depth_path,
-                       "the stereo fill needs colour images (or --no-fill)");
-    fill_->Offer(frame, r.world_from_camera);
-  }
-  // Lost frames have no pose to fuse with.
-  if (fusion_ && r.status != TrackingStatus::kLost) {
-    fusion_->OfferFrame(frame, r.world_from_camera, tracker->keyframes() - 1);
+  if (fusion_) {
+    fusion_->OfferFrame(frame, r.world_from_camera, keyframe);
     ++offered_to_fusion_;
   }
   record_.trajectory.push_back({frame.timestamp, frame.timestamp_text, r.world_from_camera});
-  ++record_.frames;
+  record_.keyframe.push_back(keyframe);
+}
+
+void TrackStage::OfferKeyframe(const RgbdFrame& frame, const TrackingResult& r, int keyframe) {
+  if (fill_ && r.has_pose()) {
+    if (frame.color.empty())
+      throw InputError(frame.depth_path.empty() ? source_.Input() : frame.depth_path,
+                       "the stereo fill needs colour images (or --no-fill)");
+    fill_->Offer(frame, r.world_from_camera, keyframe);
+  }
+  if (!loop_) return;
+  using Link = LoopKeyframeItem::Link;
+  LoopKeyframeItem item;
+  item.id = keyframe;
+  item.frame = frame;
+  item.world_from_camera = r.world_from_camera;
+  item.features = r.features;
+  item.linked_to = last_keyframe_;
+  if (r.status == TrackingStatus::kInitialized) {
+    item.link = Link::kFirst;
+  } else if (r.status == TrackingStatus::kRelocalised) {
+    item.link = Link::kRelocalised;
+    item.linked_to = r.relocalisation->keyframe;
+    item.linked_from_this = r.relocalisation->keyframe_from_camera;
+    item.information = r.relocalisation->information;
+  } else if (r.status == TrackingStatus::kRestarted) {
+    item.link = Link::kRestarted;
+  } else {
+    // Tracked against the previous keyframe: ICP's alignment is the odometry edge.
+    item.link = Link::kOdometry;
+    item.linked_from_this = last_keyframe_pose_.Inverse() * r.world_from_camera;
+    item.information = r.icp.information;
+  }
+  last_keyframe_ = keyframe;
+  last_keyframe_pose_ = r.world_from_camera;
+  loop_->Offer(std::move(item));
 }
 
 void TrackStage::CheckDepthScale(const RgbdFrame& frame) {

@@ -5,8 +5,10 @@
 // ReadStage decodes frames [first_frame, end_frame) of a FrameSource into the queue; a frame that
 // cannot be read travels down the queue as an error, so the frames before it are tracked first
 // and the error then ends tracking. TrackStage tracks every frame (frame-to-keyframe ICP,
-// registration/tracker.h), checks the first frames' depth scale (DepthScaleProblem), and keeps the
-// trajectory. Stop() ends either stage at the next frame.
+// registration/tracker.h), checks the first frames' depth scale (DepthScaleProblem), keeps the
+// trajectory as tracked with each frame's keyframe (lost frames have none), and hands frames to
+// the fusion stage and keyframes to the fill and loop-closure stages (which is also the tracker's
+// relocaliser). Stop() ends either stage at the next frame.
 //
 // Thread-safety: Stop() and the counters from any thread; the results once the stage has ended.
 #pragma once
@@ -22,6 +24,7 @@
 #include "pipeline/bounded_queue.h"
 #include "pipeline/fill_stage.h"
 #include "pipeline/fusion_stage.h"
+#include "pipeline/loop_stage.h"
 #include "pipeline/stage_thread.h"
 #include "registration/tracker.h"
 
@@ -52,7 +55,10 @@ class ReadStage {
 
 // What tracking did, for the report.
 struct TrackingRecord {
-  Trajectory trajectory;
+  Trajectory trajectory;           // the frames with a pose, as tracked
+  std::vector<int> keyframe;       // per trajectory entry: the keyframe it was tracked against
+  std::vector<std::string> lost_frames;  // names of the frames without a pose
+  int relocalised = 0, restarted = 0;
   std::vector<double> read_ms, track_ms;
   int frames = 0, lost = 0, keyframes = 0;
   std::vector<double> median_depths;  // of the first frames with returns, metres
@@ -60,13 +66,14 @@ struct TrackingRecord {
 
 class TrackStage {
  public:
-  // `queue`, `fill` and `fusion` (either may be null: no fill, no map) must outlive the stage.
+  // `queue`, `fill`, `fusion` and `loop` (each may be null: no fill, no map, no loop closure)
+  // must outlive the stage.
   // camera_file is the file an implausible depth scale is blamed on (the camera.json in use).
   // With frame_to_model, each frame is first tracked as usual, then refined against the fusion
   // stage's model of the frames before it (FrameToKeyframeTracker::SetModelReference).
   TrackStage(const FrameSource& source, const TrackerOptions& options,
              const std::string& camera_file, BoundedQueue<FrameItem>* queue, FillStage* fill,
-             FusionStage* fusion, bool frame_to_model = false);
+             FusionStage* fusion, LoopClosureStage* loop, bool frame_to_model = false);
   ~TrackStage();
   void Stop();
   // True once tracking has ended (waits at most `timeout`).
@@ -82,6 +89,7 @@ class TrackStage {
  private:
   void Run();
   void Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker);
+  void OfferKeyframe(const RgbdFrame& frame, const TrackingResult& r, int keyframe);
   void CheckDepthScale(const RgbdFrame& frame);
 
   const FrameSource& source_;
@@ -90,7 +98,10 @@ class TrackStage {
   BoundedQueue<FrameItem>* queue_;
   FillStage* fill_;
   FusionStage* fusion_;
+  LoopClosureStage* loop_;
   bool frame_to_model_;
+  int last_keyframe_ = -1;   // the newest keyframe handed to loop closure
+  SE3 last_keyframe_pose_;   // ... its tracked pose
   std::atomic<bool> stop_{false};
   std::atomic<int> frames_{0};
   int offered_to_fusion_ = 0;  // frames handed to the fusion stage

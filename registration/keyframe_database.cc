@@ -15,7 +15,7 @@ std::shared_ptr<const LoopKeyframe> MakeLoopKeyframe(int id, const RgbdFrame& fr
   GF_CHECK(frame.depth.type() == CV_32FC1, "loop keyframes need metric depth");
   auto k = std::make_shared<LoopKeyframe>();
   k->id = id;
-  k->name = frame.timestamp_text.empty() ? std::to_string(frame.index) : frame.timestamp_text;
+  k->name = KeyframeName(frame);
   k->world_from_camera = world_from_camera;
   k->features = features ? std::move(features) : std::make_shared<const FrameFeatures>();
   cv::Mat half;

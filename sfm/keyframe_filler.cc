@@ -30,10 +30,6 @@ bool KeyframeFillerOptions::Check(std::string* message) const {
   return pairs.Check(message) && stereo.Check(message) && carry.Check(message);
 }
 
-std::string KeyframeName(const RgbdFrame& frame) {
-  return frame.timestamp_text.empty() ? std::to_string(frame.index) : frame.timestamp_text;
-}
-
 KeyframeFiller::KeyframeFiller(const Camera& camera, const KeyframeFillerOptions& options)
     : camera_(camera),
       options_(options),

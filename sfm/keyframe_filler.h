@@ -35,9 +35,6 @@ struct KeyframeFillerOptions {
   bool Check(std::string* message = nullptr) const;
 };
 
-// A keyframe's name in outputs: the depth timestamp as the input lists it, else the frame index.
-std::string KeyframeName(const RgbdFrame& frame);
-
 // One keyframe's outcome, as report.json lists it.
 struct KeyframeFill {
   std::string timestamp;       // KeyframeName

@@ -399,6 +399,28 @@ size_t SurfelFusion::MemoryBytes() const {
          chunks_.capacity() * sizeof(Chunk);
 }
 
+void SurfelFusion::MoveWithKeyframes(const std::vector<SE3>& correction) {
+  if (correction.empty()) return;
+  std::vector<Eigen::Matrix3f> rotation;
+  std::vector<Eigen::Vector3f> translation;
+  for (const SE3& c : correction) {
+    rotation.push_back(c.RotationMatrix().cast<float>());
+    translation.push_back(c.translation().cast<float>());
+  }
+  const int last = static_cast<int>(correction.size()) - 1;
+  std::vector<Surfel>& surfels = map_.mutable_surfels();
+  cv::parallel_for_(cv::Range(0, static_cast<int>(surfels.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      Surfel& s = surfels[i];
+      if (s.removed() || s.keyframe < 0) continue;
+      const int k = std::min(s.keyframe, last);
+      s.position = rotation[k] * s.position + translation[k];
+      s.normal = rotation[k] * s.normal;
+    }
+  });
+  for (Chunk& c : chunks_) c.dirty = true;
+}
+
 void SurfelFusion::AddSurfels(const std::vector<Surfel>& surfels) {
   for (const Surfel& s : surfels) map_.Add(s);
   chunks_.assign((map_.size() + kChunk - 1) / kChunk, Chunk());

@@ -115,6 +115,10 @@ class SurfelFusion {
   // The stable surfels' depth seen from world_from_camera (CV_32F metres, 0 = none): discs of their
   // radius, nearest first; what frame-to-model tracking aligns the next frame to.
   cv::Mat RenderDepth(const SE3& world_from_camera);
+  // Moves every surfel with the keyframe it belongs to (Surfel::keyframe): by
+  // world_correction_of_keyframe[k] (a transform of the world applied on the left), the last entry
+  // for keyframes beyond the list; surfels of no keyframe (-1) stay. For a pose-graph correction.
+  void MoveWithKeyframes(const std::vector<SE3>& world_correction_of_keyframe);
   // Adds surfels as they are (a map read back, or copies for a benchmark of a large map).
   void AddSurfels(const std::vector<Surfel>& surfels);
 

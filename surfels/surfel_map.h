@@ -44,6 +44,8 @@ class SurfelMap {
   const Surfel& operator[](size_t i) const { return surfels_[i]; }
   Surfel& operator[](size_t i) { return surfels_[i]; }
   const std::vector<Surfel>& surfels() const { return surfels_; }
+  // For changes that keep every surfel's index (moving them all).
+  std::vector<Surfel>& mutable_surfels() { return surfels_; }
 
   void Add(const Surfel& s) { surfels_.push_back(s); }
   void Remove(size_t i) {

@@ -1,0 +1,126 @@
+// The loop-closure stage of the reconstruction, in its own thread: every keyframe the tracker
+// makes joins a keyframe database and a pose graph; loops found and verified against earlier
+// keyframes (registration/loop_detector.h) become graph edges; after each keyframe that adds
+// loops the graph is optimised (registration/pose_graph.h) and the corrections published
+// (pose_corrections.h), which the fusion stage applies to the map and the run to its trajectory.
+//
+// Keyframes reach it through a bounded queue: for recorded input the tracker waits for room (so
+// that no keyframe is lost), for live input a full queue drops the keyframe (counted; the graph then
+// links the next one to the last it has by a weak edge). It is also the tracker's Relocaliser:
+// a lost frame is looked up in the same database, from the tracking thread.
+//
+// Failures are contained per keyframe: one whose loop search throws is logged and counted, and the
+// run goes on. Finish() drains the queue, optimises once more and publishes.
+//
+// Thread-safety: Offer() from the tracking thread; Relocalise() from the tracking thread;
+// Cancel() from any thread; Finish() and Report() from the owner's.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <shared_mutex>
+#include <vector>
+
+#include "acquisition/camera.h"
+#include "acquisition/rgbd_frame.h"
+#include "pipeline/bounded_queue.h"
+#include "pipeline/pose_corrections.h"
+#include "pipeline/stage_thread.h"
+#include "registration/keyframe_database.h"
+#include "registration/loop_detector.h"
+#include "registration/pose_graph.h"
+#include "registration/tracker.h"
+
+namespace gf {
+
+struct LoopStageOptions {
+  KeyframeDatabaseOptions database;
+  LoopDetectorOptions detector;
+  PoseGraphOptions graph;
+  int queue_capacity = 16;  // keyframes waiting for the loop search
+  // Errors tracking's alignment information leaves out, added to its covariance for the odometry
+  // edges (as the loop verification's floor is for loops): per axis, metres and degrees.
+  double odometry_floor_sigma_m = 0.003;
+  double odometry_floor_sigma_deg = 0.2;
+  // A tracking restart links the new keyframe to the last good pose with this uncertainty.
+  double gap_sigma_m = 0.5;
+  double gap_sigma_deg = 30.0;
+  int relocalise_candidates = 3;  // best appearance matches verified per lost frame
+  bool drop_when_busy = true;     // live input; recorded input waits (set by the pipeline)
+  bool Check(std::string* message = nullptr) const;
+};
+
+// A keyframe as the tracker hands it over, with how it follows from the keyframes before it.
+struct LoopKeyframeItem {
+  enum class Link {
+    kFirst,         // the first keyframe: the world frame
+    kOdometry,      // tracked from keyframe `linked_to`
+    kRelocalised,   // found again against keyframe `linked_to` after a loss
+    kRestarted,     // tracking restarted at keyframe `linked_to`'s last good pose (a guess)
+  };
+  int id = 0;  // the tracker's keyframe number
+  RgbdFrame frame;
+  SE3 world_from_camera;  // as tracked
+  std::shared_ptr<const FrameFeatures> features;
+  Link link = Link::kFirst;
+  int linked_to = -1;
+  SE3 linked_from_this;  // the measured relative pose
+  Matrix6d information = Matrix6d::Zero();  // of that measurement, as the alignment gave it
+};
+
+class LoopClosureStage : public Relocaliser {
+ public:
+  // `corrections` must outlive the stage.
+  LoopClosureStage(const Camera& camera, const LoopStageOptions& options,
+                   PoseCorrections* corrections);
+  ~LoopClosureStage() override;  // cancels and joins if Finish() was not called
+  LoopClosureStage(const LoopClosureStage&) = delete;
+  LoopClosureStage& operator=(const LoopClosureStage&) = delete;
+
+  void Offer(LoopKeyframeItem item);
+  // Relocaliser: the best appearance matches among the keyframes searched so far.
+  std::optional<Relocalisation> Relocalise(const RgbdFrame& frame,
+                                           const FrameFeatures& features) override;
+  // Searches what is queued, optimises, publishes, joins. `poll` (may be empty) is called every
+  // 50 ms while it waits; true cancels the rest.
+  void Finish(const std::function<bool()>& poll = {});
+  void Cancel();
+  int keyframes_done() const { return keyframes_done_; }
+  // report.json's "loops".
+  nlohmann::ordered_json Report() const;
+
+ private:
+  void Run();
+  void Process(const LoopKeyframeItem& item);
+  // Adds the keyframe's node and its link to the graph; returns the node's initial estimate.
+  SE3 AddNode(const LoopKeyframeItem& item);
+  void Optimise();
+  void Record(const LoopKeyframeItem& item, const LoopDetection& detection);
+
+  Camera camera_;
+  LoopStageOptions options_;
+  PoseCorrections* corrections_;
+  BoundedQueue<LoopKeyframeItem> queue_;
+  // The database is read by the loop thread and by relocalisation (tracking thread), written by
+  // the loop thread.
+  mutable std::shared_mutex database_mutex_;
+  KeyframeDatabase database_;
+  // Loop thread only, then the owner's after Finish().
+  LoopDetector detector_;
+  PoseGraph graph_;
+  std::map<int, SE3> tracked_;  // world_from_keyframe as tracked, by id
+  int last_id_ = -1;
+  bool unoptimised_loops_ = false;
+  nlohmann::ordered_json accepted_ = nlohmann::ordered_json::array();
+  std::map<std::string, int> refused_;  // reasons, without their figures
+  int candidates_ = 0, verified_ = 0, pending_ = 0, optimisations_ = 0, failed_ = 0;
+  std::vector<double> keyframe_ms_, optimise_ms_;
+  std::atomic<int> keyframes_done_{0};
+  std::atomic<int> dropped_{0};
+  std::atomic<int> relocalisation_attempts_{0}, relocalised_{0};
+  std::atomic<bool> cancelled_{false};
+  StageThread worker_;
+};
+
+}  // namespace gf
