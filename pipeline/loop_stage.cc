@@ -26,11 +26,15 @@ json Timing(std::vector<double> ms) {
 }
 
 // A refusal's reason without its figures ("too few RANSAC inliers (3 of 20 needed)" -> "too few
-// RANSAC inliers"), so that reasons can be counted.
+// RANSAC inliers", "ICP moved RANSAC's pose by 0.05 m" -> "ICP moved RANSAC's pose"), so that
+// reasons can be counted.
 std::string ReasonKind(const std::string& reason) {
-  const size_t cut = reason.find_first_of("(:");
+  size_t cut = reason.find_first_of("(:0123456789");
   std::string kind = reason.substr(0, cut);
   while (!kind.empty() && kind.back() == ' ') kind.pop_back();
+  for (const std::string tail : {" by", " to"})
+    if (kind.size() > tail.size() && kind.compare(kind.size() - tail.size(), tail.size(), tail) == 0)
+      kind.resize(kind.size() - tail.size());
   return kind;
 }
 

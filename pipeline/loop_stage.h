@@ -60,7 +60,7 @@ struct LoopKeyframeItem {
     kRestarted,     // tracking restarted at keyframe `linked_to`'s last good pose (a guess)
   };
   int id = 0;  // the tracker's keyframe number
-  RgbdFrame frame;
+  RgbdFrame frame;  // with the depth tracking used (undistorted, on the stage's camera)
   SE3 world_from_camera;  // as tracked
   std::shared_ptr<const FrameFeatures> features;
   Link link = Link::kFirst;
@@ -71,7 +71,8 @@ struct LoopKeyframeItem {
 
 class LoopClosureStage : public Relocaliser {
  public:
-  // `corrections` must outlive the stage.
+  // `camera`: the one tracking works on (the input's without distortion). `corrections` must
+  // outlive the stage.
   LoopClosureStage(const Camera& camera, const LoopStageOptions& options,
                    PoseCorrections* corrections);
   ~LoopClosureStage() override;  // cancels and joins if Finish() was not called

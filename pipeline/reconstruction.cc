@@ -179,7 +179,10 @@ std::unique_ptr<Reconstruction::Stages> Reconstruction::MakeStages(FrameSource& 
   if (options_.loop_closure) {
     LoopStageOptions loop_options = options_.loop_options;
     loop_options.drop_when_busy = live;
-    s->loop = std::make_unique<LoopClosureStage>(source.camera(), loop_options, &s->corrections);
+    // On the images tracking works on: undistorted (FrameToKeyframeTracker).
+    Camera pinhole = source.camera();
+    pinhole.distortion = {0, 0, 0, 0, 0};
+    s->loop = std::make_unique<LoopClosureStage>(pinhole, loop_options, &s->corrections);
   }
   s->queue = std::make_unique<BoundedQueue<FrameItem>>(options_.queue_capacity);
   s->reader = std::make_unique<ReadStage>(&source, options_.first_frame, options_.end_frame,

@@ -140,6 +140,7 @@ void TrackStage::OfferKeyframe(const RgbdFrame& frame, const TrackingResult& r, 
   LoopKeyframeItem item;
   item.id = keyframe;
   item.frame = frame;
+  item.frame.depth = r.tracked_depth;  // loop closure aligns what tracking aligned
   item.world_from_camera = r.world_from_camera;
   item.features = r.features;
   item.linked_to = last_keyframe_;

@@ -26,8 +26,8 @@ bool TrackerOptions::Check(std::string* message) const {
     if (message) *message = "max_jump_m and max_jump_deg must be positive";
     return false;
   }
-  if (relocalise_frames < 0) {
-    if (message) *message = "relocalise_frames must be >= 0";
+  if (relocalise_frames < 0 || !std::isfinite(simulated_drift_deg_per_m)) {
+    if (message) *message = "relocalise_frames must be >= 0, simulated drift finite";
     return false;
   }
   if (!(restart_m > 0) || !(restart_deg > 0)) {
@@ -62,16 +62,41 @@ std::string TrackingResult::BriefReport() const {
 }
 
 FrameToKeyframeTracker::FrameToKeyframeTracker(const Camera& camera, const TrackerOptions& options)
-    : camera_(camera), options_(options) {
+    : camera_(camera), pinhole_(camera), options_(options) {
   std::string problem;
   GF_CHECK(options_.Check(&problem), problem);
+  pinhole_.distortion = {0, 0, 0, 0, 0};
+  if (camera.HasDistortion()) camera.UndistortionMaps(&undistort_x_, &undistort_y_);
+}
+
+cv::Mat FrameToKeyframeTracker::UndistortedDepth(const cv::Mat& depth) const {
+  if (undistort_x_.empty() || depth.empty()) return depth;
+  cv::Mat out;
+  cv::remap(depth, out, undistort_x_, undistort_y_, cv::INTER_NEAREST, cv::BORDER_CONSTANT, 0);
+  return out;
+}
+
+RgbdFrame FrameToKeyframeTracker::Undistorted(const RgbdFrame& frame) const {
+  if (undistort_x_.empty()) return frame;
+  // New images: the frame's own are shared with the other stages and must not change.
+  RgbdFrame f = frame;
+  f.depth = UndistortedDepth(frame.depth);
+  f.color = cv::Mat();
+  f.hole_mask = cv::Mat();
+  if (!frame.color.empty())
+    cv::remap(frame.color, f.color, undistort_x_, undistort_y_, cv::INTER_LINEAR,
+              cv::BORDER_CONSTANT);
+  if (!frame.hole_mask.empty())
+    cv::remap(frame.hole_mask, f.hole_mask, undistort_x_, undistort_y_, cv::INTER_NEAREST,
+              cv::BORDER_CONSTANT, 0);
+  return f;
 }
 
 void FrameToKeyframeTracker::SetModelReference(const cv::Mat& depth,
                                                const SE3& world_from_reference) {
   GF_CHECK(depth.type() == CV_32FC1 && depth.cols == camera_.width && depth.rows == camera_.height,
            "the model's depth must be CV_32F of the camera's size");
-  model_ = BuildDepthPyramid(depth, camera_, options_.pyramid_levels);
+  model_ = BuildDepthPyramid(UndistortedDepth(depth), pinhole_, options_.pyramid_levels);
   world_from_model_ = world_from_reference;
 }
 
@@ -129,9 +154,14 @@ void FrameToKeyframeTracker::MakeKeyframe(DepthPyramid current, FeaturesPtr feat
 TrackingResult FrameToKeyframeTracker::TrackWhileLost(const RgbdFrame& frame,
                                                       DepthPyramid current, FeaturesPtr features,
                                                       TrackingResult result) {
-  // The last keyframe again, from the last good pose (a passing failure: blur, a covered lens).
+  // The last keyframe again, from the last good pose (a passing failure: blur, a covered lens),
+  // held to the keyframe policy's overlap and feature support: after a loss the camera may be
+  // anywhere, and a partial fit of a similar surface must not pass for the way back.
   const SE3 keyframe_from_last = world_from_keyframe_.Inverse() * world_from_previous_;
-  if (AlignToKeyframe(current, *features, keyframe_from_last, &result)) {
+  const KeyframePolicy& policy = options_.keyframes;
+  if (AlignToKeyframe(current, *features, keyframe_from_last, &result) &&
+      result.overlap >= policy.min_overlap &&
+      (features->empty() || result.ransac.inliers >= policy.min_feature_inliers)) {
     result.status = TrackingStatus::kTracking;
     result.world_from_camera = world_from_keyframe_ * result.icp.reference_from_current;
     lost_frames_ = 0;
@@ -195,13 +225,15 @@ bool FrameToKeyframeTracker::NeedsKeyframe(const RgbdFrame& frame,
          result.overlap < k.min_overlap || few_features;
 }
 
-TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& frame) {
+TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& input) {
   TrackingResult result;
   const DepthPyramid model = std::move(model_);  // for this frame only
   model_ = DepthPyramid();
-  DepthPyramid current = BuildDepthPyramid(frame.depth, camera_, options_.pyramid_levels);
+  const RgbdFrame frame = Undistorted(input);
+  result.tracked_depth = frame.depth;
+  DepthPyramid current = BuildDepthPyramid(frame.depth, pinhole_, options_.pyramid_levels);
   auto features = std::make_shared<const FrameFeatures>(
-      options_.use_features ? ExtractFrameFeatures(frame, camera_, options_.surf)
+      options_.use_features ? ExtractFrameFeatures(frame, pinhole_, options_.surf)
                             : FrameFeatures());
   result.features = features;
   if (!initialized_) {
@@ -224,9 +256,18 @@ TrackingResult FrameToKeyframeTracker::Track(const RgbdFrame& frame) {
   result.status = TrackingStatus::kTracking;
   result.world_from_camera = world_from_keyframe_ * result.icp.reference_from_current;
   if (!model.depth.empty()) RefineAgainstModel(model, current, &result);
+  const bool new_keyframe = NeedsKeyframe(frame, result);
+  if (new_keyframe && options_.simulated_drift_deg_per_m != 0) {
+    const SE3 step = world_from_keyframe_.Inverse() * result.world_from_camera;
+    const double yaw = options_.simulated_drift_deg_per_m * step.TranslationNorm() * M_PI / 180;
+    result.world_from_camera =
+        result.world_from_camera *
+        SE3(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY())),
+            Eigen::Vector3d::Zero());
+  }
   velocity_ = world_from_previous_.Inverse() * result.world_from_camera;
   world_from_previous_ = result.world_from_camera;
-  if (NeedsKeyframe(frame, result)) {
+  if (new_keyframe) {
     MakeKeyframe(std::move(current), std::move(features), result.world_from_camera);
     result.new_keyframe = true;
   }

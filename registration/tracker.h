@@ -14,6 +14,11 @@
 // the frame becomes a keyframe at the last good pose (kRestarted: a guess, reported lost), and the
 // run goes on from there.
 //
+// Tracking works on images undistorted onto the ideal pinhole camera of the same intrinsics
+// (pinhole_camera()): depth by nearest pixel, colour bilinear. Lens distortion ignored would bend
+// the geometry by up to a few per cent at the image's edges (TUM fr1's k1 is 0.26); between
+// neighbouring frames that nearly cancels, but not between views far apart (loops).
+//
 // No threads, no I/O. Usage:
 //   gf::FrameToKeyframeTracker tracker(camera, gf::TrackerOptions{});
 //   for (each frame) { gf::TrackingResult r = tracker.Track(frame); trajectory.push_back(...); }
@@ -66,6 +71,10 @@ struct TrackerOptions {
   // After a loss, frames looked up among earlier keyframes (with a Relocaliser) before tracking
   // restarts at the last good pose.
   int relocalise_frames = 30;
+  // For evaluation only (0 in real use): a yaw about the camera's y axis, in degrees per metre
+  // travelled, added to each new keyframe's pose: simulated drift, to measure how much of it loop
+  // closure removes.
+  double simulated_drift_deg_per_m = 0.0;
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -107,6 +116,7 @@ struct TrackingResult {
   double overlap = 0;   // share of the frame's points that land on the keyframe's surface
   RansacReport ransac;  // feature alignment to the keyframe (empty when features are off)
   IcpSummary icp;               // alignment to the keyframe
+  cv::Mat tracked_depth;        // the frame's depth as tracking used it (on pinhole_camera())
   std::shared_ptr<const FrameFeatures> features;  // the frame's (empty without colour)
   std::optional<Relocalisation> relocalisation;   // kRelocalised only
   std::string BriefReport() const;
@@ -125,6 +135,8 @@ class FrameToKeyframeTracker : public Tracker {
   FrameToKeyframeTracker(const Camera& camera, const TrackerOptions& options);
   TrackingResult Track(const RgbdFrame& frame) override;
   int keyframes() const { return keyframes_; }
+  // The camera of the images tracking works on: the input camera without lens distortion.
+  const Camera& pinhole_camera() const { return pinhole_; }
   // Frame-to-model tracking (KinectFusion, ElasticFusion): the next Track() first aligns the frame
   // to its keyframe as usual, then refines the pose by point-to-plane ICP against `depth`, the
   // model's depth rendered at world_from_reference (CV_32F metres on this camera's pixels, 0 =
@@ -150,7 +162,14 @@ class FrameToKeyframeTracker : public Tracker {
                           TrackingResult* result) const;
   bool NeedsKeyframe(const RgbdFrame& frame, const TrackingResult& result) const;
 
+  // The frame's depth, colour and hole mask on the pinhole camera (the frame itself without
+  // distortion).
+  RgbdFrame Undistorted(const RgbdFrame& frame) const;
+  cv::Mat UndistortedDepth(const cv::Mat& depth) const;
+
   Camera camera_;
+  Camera pinhole_;                   // camera_ without distortion
+  cv::Mat undistort_x_, undistort_y_;  // cv::remap maps (empty: no distortion)
   TrackerOptions options_;
   Relocaliser* relocaliser_ = nullptr;
   bool initialized_ = false;

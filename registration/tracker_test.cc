@@ -99,5 +99,27 @@ TEST(FrameToKeyframeTracker, ReportsLossKeepsThePoseAndRecovers) {
   EXPECT_EQ(again.status, TrackingStatus::kTracking) << again.BriefReport();
 }
 
+// Tracking undistorts the frames it aligns into images of its own: the caller's frame (shared with
+// the fill and the fusion) stays as it was.
+TEST(FrameToKeyframeTracker, LeavesTheCallersFrameAsItWas) {
+  const synth::Scene scene = synth::Scene::Make("glass-table", 4);
+  synth::SynthOptions options;
+  options.frames = 2;
+  const std::vector<SE3> poses = synth::MakeTrajectory(scene, options);
+  Camera camera = synth::SynthCamera();
+  camera.distortion = {0.26, -0.95, -0.005, 0.003, 1.16};  // TUM fr1's lens
+  FrameToKeyframeTracker tracker(camera, TrackerOptions{});
+  for (int i = 0; i < 2; ++i) {
+    const RgbdFrame frame = SynthDepthFrame(scene, poses[i], i);
+    const cv::Mat color = frame.color.clone(), depth = frame.depth.clone(),
+                  holes = frame.hole_mask.clone();
+    const TrackingResult r = tracker.Track(frame);
+    EXPECT_EQ(cv::norm(frame.color, color, cv::NORM_INF), 0);
+    EXPECT_EQ(cv::norm(frame.depth, depth, cv::NORM_INF), 0);
+    EXPECT_EQ(cv::norm(frame.hole_mask, holes, cv::NORM_INF), 0);
+    EXPECT_GT(cv::norm(r.tracked_depth, depth, cv::NORM_INF), 0);  // undistorted: not the same
+  }
+}
+
 }  // namespace
 }  // namespace gf
