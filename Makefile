@@ -18,8 +18,9 @@ DEB_PACKAGES := cmake make g++ pkg-config \
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 SANITIZE_DIR ?= build-asan
+TSAN_DIR ?= build-tsan
 
-.PHONY: all deps configure build test sanitize demo clean format
+.PHONY: all deps configure build test sanitize tsan demo clean format
 
 all: build
 
@@ -55,6 +56,18 @@ sanitize: deps
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
 	  ctest --output-on-failure -j $(JOBS) -LE '^tests$$' --repeat after-timeout:2
 
+# The pipeline's tests (whole reconstructions in-process, every stage in its own thread) built with
+# ThreadSanitizer; CI runs it after `make sanitize`. OpenCV's parallel loops run on one thread there
+# (OPENCV_FOR_THREADS_NUM=1): its TBB pool is not instrumented, and what it shares is joined
+# before our code reads it.
+tsan: deps
+	cmake -S . -B $(TSAN_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGF_TSAN=ON \
+	  -DGF_BUILD_TESTS=ON -DGF_BUILD_BENCHMARKS=OFF $(CMAKE_FLAGS)
+	cmake --build $(TSAN_DIR) -j $(JOBS) --target pipeline_reconstruction pipeline_loop_closure \
+	  pipeline_fill_stage pipeline_settings
+	cd $(TSAN_DIR) && OPENCV_FOR_THREADS_NUM=1 TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
+	  ctest --output-on-failure -j $(JOBS) -R '^pipeline/' --repeat after-timeout:2
+
 demo: build
 	$(BUILD_DIR)/apps/glassfusion demo --out $(DEMO_OUT)
 
@@ -62,4 +75,4 @@ format:
 	find acquisition registration sfm surfels pipeline apps datasets tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
 
 clean:
-	rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(DEMO_OUT)
+	rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(TSAN_DIR) $(DEMO_OUT)

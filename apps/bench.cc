@@ -149,6 +149,120 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
   return j;
 }
 
+// Our tracker, frame to keyframe, one frame after the other (lost frames have no pose).
+MethodResult TrackFrames(const std::vector<RgbdFrame>& frames, const Camera& camera,
+                         const BenchOptions& options) {
+  MethodResult ours{"glassfusion frame-to-keyframe ICP", {}, {}, 0};
+  FrameToKeyframeTracker tracker(camera, options.pipeline.tracker);
+  TerminalProgress progress("bench: glassfusion", static_cast<int>(frames.size()));
+  for (const RgbdFrame& f : frames) {
+    const auto t0 = Clock::now();
+    const TrackingResult r = tracker.Track(f);
+    ours.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    ours.failures += !r.has_pose();
+    if (r.has_pose()) ours.trajectory.push_back({f.timestamp, f.timestamp_text, r.world_from_camera});
+    progress.Update(static_cast<int>(ours.ms.size()));
+  }
+  return ours;
+}
+
+// The same tracker refined against the surfel map of the frames before each one, fused as it
+// goes (the pipeline's --frame-to-model, without threads); ms include the fusion.
+MethodResult TrackFramesToModel(const std::vector<RgbdFrame>& frames, const Camera& camera,
+                                const BenchOptions& options) {
+  MethodResult model{"glassfusion frame-to-model ICP (+ fusion)", {}, {}, 0};
+  FrameToKeyframeTracker tracker(camera, options.pipeline.tracker);
+  SurfelFusion fusion(camera, options.pipeline.fusion_options.fusion);
+  TerminalProgress progress("bench: glassfusion frame-to-model", static_cast<int>(frames.size()));
+  SE3 last;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const auto t0 = Clock::now();
+    if (i > 0) tracker.SetModelReference(fusion.RenderDepth(last), last);
+    const TrackingResult r = tracker.Track(frames[i]);
+    if (r.has_pose()) {
+      fusion.FuseFrame(frames[i], r.world_from_camera, 0);
+      last = r.world_from_camera;
+      model.trajectory.push_back({frames[i].timestamp, frames[i].timestamp_text, last});
+    }
+    model.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    model.failures += !r.has_pose();
+    progress.Update(static_cast<int>(i + 1));
+  }
+  return model;
+}
+
+// The tracking pipeline with loop closure, in-process (its threads: reader, tracker, loop
+// closure; no fill, no fusion), on the frames in memory: the trajectory it writes, ms per frame
+// of the whole run, and report.json's "loops" (the loop stage's cost per keyframe).
+nlohmann::ordered_json BenchLoopClosure(const std::vector<RgbdFrame>& frames,
+                                        const CameraFile& camera, const BenchOptions& options,
+                                        MethodResult* result) {
+  ReconstructionOptions pipeline = options.pipeline;
+  pipeline.fill = pipeline.fusion = false;
+  pipeline.loop_closure = true;
+  pipeline.first_frame = 0;
+  pipeline.end_frame = -1;
+  InMemoryFrameSource source(camera, frames);
+  InMemoryRunSink sink;
+  TerminalProgress progress("bench: glassfusion + loop closure", static_cast<int>(frames.size()));
+  ReconstructionCallbacks callbacks;
+  callbacks.progress = [&](const ReconstructionProgress& p) { progress.Update(p.frames); };
+  const ReconstructionSummary s = Reconstruction(pipeline).Run(source, &sink, callbacks);
+  result->name = "glassfusion + loop closure (pipeline)";
+  result->trajectory = sink.trajectory;
+  result->ms.assign(frames.size(), 1000.0 * s.seconds / frames.size());
+  result->failures = s.lost;
+  nlohmann::ordered_json loops = s.report["loops"];
+  loops.erase("loops");  // the list of loops: in a run's report.json, not here
+  return loops;
+}
+
+// OpenCV's RGB-D odometry, frame to frame, on the same frames.
+std::vector<MethodResult> RunOdometryPeers(const std::vector<RgbdFrame>& frames,
+                                           const Camera& camera) {
+  std::vector<MethodResult> results;
+  cv::Mat k;
+  camera.CvK().convertTo(k, CV_32F);
+  std::vector<std::pair<std::string, cv::Ptr<cv::rgbd::Odometry>>> peers = {
+      {"opencv RgbdOdometry", cv::rgbd::RgbdOdometry::create(k)},
+      {"opencv ICPOdometry", cv::rgbd::ICPOdometry::create(k)},
+      {"opencv RgbdICPOdometry", cv::rgbd::RgbdICPOdometry::create(k)},
+      {"opencv FastICPOdometry", cv::rgbd::FastICPOdometry::create(k)},
+  };
+  std::vector<cv::Mat> gray(frames.size()), masks(frames.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    cv::cvtColor(frames[i].color, gray[i], cv::COLOR_BGR2GRAY);
+    masks[i] = frames[i].depth > 0;
+  }
+  for (auto& [name, odometry] : peers) {
+    MethodResult m{name, {}, {}, 0};
+    TerminalProgress progress("bench: " + name, static_cast<int>(frames.size()));
+    SE3 world_from_current;
+    m.trajectory.push_back({frames[0].timestamp, frames[0].timestamp_text, world_from_current});
+    for (size_t i = 1; i < frames.size(); ++i) {
+      cv::Mat rt;
+      const auto t0 = Clock::now();
+      bool ok = false;
+      try {
+        ok = odometry->compute(gray[i - 1], frames[i - 1].depth, masks[i - 1], gray[i],
+                               frames[i].depth, masks[i], rt);
+      } catch (const cv::Exception&) {
+        ok = false;
+      }
+      m.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+      if (ok && !rt.empty()) {
+        world_from_current = world_from_current * SE3::FromMatrix(ToEigen(rt)).Inverse();
+      } else {
+        ++m.failures;
+      }
+      m.trajectory.push_back({frames[i].timestamp, frames[i].timestamp_text, world_from_current});
+      progress.Update(static_cast<int>(i + 1));
+    }
+    results.push_back(std::move(m));
+  }
+  return results;
+}
+
 }  // namespace
 
 bool BenchOptions::Check(std::string* message) const {
@@ -191,41 +305,14 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   if (!gt_path.empty()) gt = ReadTrajectory(gt_path);
 
   std::vector<MethodResult> results;
-  {
-    MethodResult ours{"glassfusion frame-to-keyframe ICP", {}, {}, 0};
-    FrameToKeyframeTracker tracker(camera, options.pipeline.tracker);
-    TerminalProgress progress("bench: glassfusion", static_cast<int>(frames.size()));
-    for (const RgbdFrame& f : frames) {
-      const auto t0 = Clock::now();
-      const TrackingResult r = tracker.Track(f);
-      ours.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-      ours.failures += r.status == TrackingStatus::kLost;
-      ours.trajectory.push_back({f.timestamp, f.timestamp_text, r.world_from_camera});
-      progress.Update(static_cast<int>(ours.ms.size()));
-    }
-    results.push_back(std::move(ours));
+  results.push_back(TrackFrames(frames, camera, options));
+  nlohmann::ordered_json loop_closure;
+  if (options.loop_closure) {
+    MethodResult m;
+    loop_closure = BenchLoopClosure(frames, source->camera_file(), options, &m);
+    results.push_back(std::move(m));
   }
-  if (options.frame_to_model) {
-    // The same tracker refined against the surfel map of the frames before each one, fused as it
-    // goes (the pipeline's --frame-to-model, without threads); ms include the fusion.
-    MethodResult model{"glassfusion frame-to-model ICP (+ fusion)", {}, {}, 0};
-    FrameToKeyframeTracker tracker(camera, options.pipeline.tracker);
-    SurfelFusion fusion(camera, options.pipeline.fusion_options.fusion);
-    TerminalProgress progress("bench: glassfusion frame-to-model", static_cast<int>(frames.size()));
-    SE3 last;
-    for (size_t i = 0; i < frames.size(); ++i) {
-      const auto t0 = Clock::now();
-      if (i > 0) tracker.SetModelReference(fusion.RenderDepth(last), last);
-      const TrackingResult r = tracker.Track(frames[i]);
-      if (r.status != TrackingStatus::kLost) fusion.FuseFrame(frames[i], r.world_from_camera, 0);
-      last = r.world_from_camera;
-      model.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-      model.failures += r.status == TrackingStatus::kLost;
-      model.trajectory.push_back({frames[i].timestamp, frames[i].timestamp_text, last});
-      progress.Update(static_cast<int>(i + 1));
-    }
-    results.push_back(std::move(model));
-  }
+  if (options.frame_to_model) results.push_back(TrackFramesToModel(frames, camera, options));
   nlohmann::ordered_json stereo_fill;
   if (options.fill_every > 0)
     stereo_fill = BenchStereoFill(frames, results.front().trajectory, camera, options);
@@ -233,48 +320,8 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   if (options.fusion)
     fusion = BenchFusion(frames, results.front().trajectory, camera,
                          options.pipeline.fusion_options.fusion);
-
-  if (options.peers) {
-    cv::Mat k;
-    camera.CvK().convertTo(k, CV_32F);
-    std::vector<std::pair<std::string, cv::Ptr<cv::rgbd::Odometry>>> peers = {
-        {"opencv RgbdOdometry", cv::rgbd::RgbdOdometry::create(k)},
-        {"opencv ICPOdometry", cv::rgbd::ICPOdometry::create(k)},
-        {"opencv RgbdICPOdometry", cv::rgbd::RgbdICPOdometry::create(k)},
-        {"opencv FastICPOdometry", cv::rgbd::FastICPOdometry::create(k)},
-    };
-    std::vector<cv::Mat> gray(frames.size()), masks(frames.size());
-    for (size_t i = 0; i < frames.size(); ++i) {
-      cv::cvtColor(frames[i].color, gray[i], cv::COLOR_BGR2GRAY);
-      masks[i] = frames[i].depth > 0;
-    }
-    for (auto& [name, odometry] : peers) {
-      MethodResult m{name, {}, {}, 0};
-      TerminalProgress progress("bench: " + name, static_cast<int>(frames.size()));
-      SE3 world_from_current;
-      m.trajectory.push_back({frames[0].timestamp, frames[0].timestamp_text, world_from_current});
-      for (size_t i = 1; i < frames.size(); ++i) {
-        cv::Mat rt;
-        const auto t0 = Clock::now();
-        bool ok = false;
-        try {
-          ok = odometry->compute(gray[i - 1], frames[i - 1].depth, masks[i - 1], gray[i],
-                                 frames[i].depth, masks[i], rt);
-        } catch (const cv::Exception&) {
-          ok = false;
-        }
-        m.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-        if (ok && !rt.empty()) {
-          world_from_current = world_from_current * SE3::FromMatrix(ToEigen(rt)).Inverse();
-        } else {
-          ++m.failures;
-        }
-        m.trajectory.push_back({frames[i].timestamp, frames[i].timestamp_text, world_from_current});
-        progress.Update(static_cast<int>(i + 1));
-      }
-      results.push_back(std::move(m));
-    }
-  }
+  if (options.peers)
+    for (MethodResult& m : RunOdometryPeers(frames, camera)) results.push_back(std::move(m));
 
   nlohmann::ordered_json out;
   out["input"] = options.input;
@@ -286,6 +333,7 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
     out["methods"].push_back(Summarise(m, gt.empty() ? nullptr : &gt));
   if (!stereo_fill.is_null()) out["stereo_fill"] = stereo_fill;
   if (!fusion.is_null()) out["fusion"] = fusion;
+  if (!loop_closure.is_null()) out["loop_closure"] = loop_closure;
   out["settings"] = SettingsToJson(options.pipeline);
   return out;
 }

@@ -28,6 +28,9 @@ struct BenchOptions {
   int first_frame = 0;
   int end_frame = -1;
   bool peers = true;  // also run the OpenCV odometry peers
+  // Also the whole tracking pipeline with loop closure (in-process, its stage threads, no fill
+  // or fusion): ATE beside the others, and the loop stage's cost per keyframe.
+  bool loop_closure = true;
   // > 0: also time stereo hole filling on one core, with every fill_every-th frame a keyframe,
   // paired and filled as reconstruct does (KeyframePairScheduler, then FillHolesByStereo) with our
   // tracked poses; next to OpenCV's StereoSGBM alone on the same rectified sideways pairs.

@@ -185,17 +185,21 @@ void AddBenchCommand(CLI::App& app) {
       "and filled as reconstruct does with the tracked poses (0: off)");
   cmd->add_flag("--frame-to-model", options->frame_to_model,
                 "also our tracker refined against the surfel map of the frames before each one");
+  auto no_loops = std::make_shared<bool>(false);
+  cmd->add_flag("--no-loop-closure", *no_loops,
+                "leave out the row of our tracking with loop closure and the loop stage's cost");
   cmd->add_flag("--fusion", options->fusion,
                 "also time the surfel fusion per frame on one core and on two, and with a map "
                 "of about a million surfels");
   auto config = std::make_shared<std::string>();
   cmd->add_option("--config", *config,
                   "JSON file of tracker and fill settings, as for reconstruct");
-  cmd->callback([options, args, range, no_peers, config] {
+  cmd->callback([options, args, range, no_peers, no_loops, config] {
     if (!config->empty()) ApplyConfigFile(*config, &options->pipeline);
     options->input = args->input;
     options->source = args->ToOptions();
     options->peers = !*no_peers;
+    options->loop_closure = !*no_loops;
     if (!range->empty()) ParseFrameRange(*range, &options->first_frame, &options->end_frame);
     const auto j = RunBench(*options);
     std::printf("%-36s %8s %8s %10s %8s\n", "method", "ms", "fps", "ATE (cm)", "failed");
