@@ -57,15 +57,15 @@ sanitize: deps
 	  ctest --output-on-failure -j $(JOBS) -LE '^tests$$' --repeat after-timeout:2
 
 # The pipeline's tests (whole reconstructions in-process, every stage in its own thread) built with
-# ThreadSanitizer; CI runs it after `make sanitize`. OpenCV's parallel loops run on one thread there
-# (OPENCV_FOR_THREADS_NUM=1): its TBB pool is not instrumented, and what it shares is joined
-# before our code reads it.
+# ThreadSanitizer; CI runs it after `make sanitize`. OpenCV's parallel loops run on the calling
+# thread there (tests/tsan_serial_opencv.cc): its TBB pool is not instrumented.
 tsan: deps
 	cmake -S . -B $(TSAN_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGF_TSAN=ON \
-	  -DGF_BUILD_TESTS=ON -DGF_BUILD_BENCHMARKS=OFF $(CMAKE_FLAGS)
+	  -DGF_BUILD_TESTS=ON -DGF_BUILD_BENCHMARKS=OFF \
+	  -DCMAKE_GTEST_DISCOVER_TESTS_DISCOVERY_MODE=PRE_TEST $(CMAKE_FLAGS)
 	cmake --build $(TSAN_DIR) -j $(JOBS) --target pipeline_reconstruction pipeline_loop_closure \
 	  pipeline_fill_stage pipeline_settings
-	cd $(TSAN_DIR) && OPENCV_FOR_THREADS_NUM=1 TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
+	cd $(TSAN_DIR) && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/tests/tsan.supp" \
 	  ctest --output-on-failure -j $(JOBS) -R '^pipeline/' --repeat after-timeout:2
 
 demo: build

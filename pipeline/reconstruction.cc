@@ -159,6 +159,8 @@ std::unique_ptr<Reconstruction::Stages> Reconstruction::MakeStages(FrameSource& 
                                                                    RunSink* sink,
                                                                    RunSink* without_fill,
                                                                    bool live) const {
+  // spdlog builds its default logger on first use; here, before the stage threads log through it.
+  spdlog::default_logger_raw();
   auto s = std::make_unique<Stages>();
   const PoseCorrections* corrections = options_.loop_closure ? &s->corrections : nullptr;
   if (options_.fusion) {

@@ -14,8 +14,9 @@
 namespace gf::sweep_detail {
 
 // The inner loops are compiled twice, for AVX2 (twice the vector width) and for the baseline
-// x86-64 (SSE2); the loader picks what the CPU has.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+// x86-64 (SSE2); the loader picks what the CPU has. Not under ThreadSanitizer: the loader runs the
+// clones' resolver before the sanitizer's runtime exists, and its instrumented code crashes.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
 #define GF_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
 #else
 #define GF_VECTOR_CLONES
