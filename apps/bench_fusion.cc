@@ -4,17 +4,12 @@
 #include <opencv2/core/utility.hpp>
 
 #include "apps/progress.h"
+#include "pipeline/timing.h"
 
 namespace gf {
 namespace {
 
 using json = nlohmann::ordered_json;
-
-json Timing(std::vector<double> ms) {
-  std::sort(ms.begin(), ms.end());
-  if (ms.empty()) return {{"median_ms", nullptr}, {"max_ms", nullptr}};
-  return {{"median_ms", ms[ms.size() / 2]}, {"max_ms", ms.back()}};
-}
 
 // Fuses every frame into `fusion` with `threads` threads; the milliseconds of each.
 std::vector<double> FuseAll(const std::vector<RgbdFrame>& frames, const Trajectory& tracked,
@@ -42,7 +37,7 @@ json BenchFusion(const std::vector<RgbdFrame>& frames, const Trajectory& tracked
     TerminalProgress progress("bench: fusion, " + std::to_string(t) + " thread(s)",
                               static_cast<int>(frames.size()));
     out["map"]["threads_" + std::to_string(t)] =
-        Timing(FuseAll(frames, tracked, t, &fusion, &progress));
+        TimingJson(FuseAll(frames, tracked, t, &fusion, &progress));
     out["map"]["surfels"] = fusion.map().live();
     out["map"]["stable_surfels"] = fusion.Counts().total_stable();
     out["map"]["memory_bytes"] = fusion.MemoryBytes();
@@ -63,7 +58,7 @@ json BenchFusion(const std::vector<RgbdFrame>& frames, const Trajectory& tracked
       TerminalProgress progress("bench: fusion, large map, " + std::to_string(t) + " thread(s)",
                                 static_cast<int>(frames.size()));
       const std::vector<double> ms = FuseAll(frames, tracked, t, &fusion, &progress);
-      out["large_map"]["threads_" + std::to_string(t)] = Timing(ms);
+      out["large_map"]["threads_" + std::to_string(t)] = TimingJson(ms);
       out["large_map"]["surfels"] = fusion.map().live();
       out["large_map"]["memory_bytes"] = fusion.MemoryBytes();
     }

@@ -7,6 +7,7 @@
 
 #include "acquisition/errors.h"
 #include "acquisition/stats.h"
+#include "pipeline/timing.h"
 
 namespace gf {
 namespace {
@@ -26,12 +27,6 @@ const char* SourceName(size_t source) {
     default:
       return "none";
   }
-}
-
-json Timing(std::vector<double> ms) {
-  if (ms.empty()) return {{"median_ms", nullptr}, {"max_ms", nullptr}, {"count", 0}};
-  std::sort(ms.begin(), ms.end());
-  return {{"median_ms", ms[ms.size() / 2]}, {"max_ms", ms.back()}, {"count", ms.size()}};
 }
 
 }  // namespace
@@ -221,8 +216,8 @@ json FusionStage::Report(size_t index) const {
   json r = SurfelReport(m.fusion, m.over_time);
   r["variant"] = m.variant.name;
   r["fills_fused"] = m.fill_ms.size();
-  r["frame_ms"] = Timing(m.frame_ms);
-  r["fill_ms"] = Timing(m.fill_ms);
+  r["frame_ms"] = TimingJson(m.frame_ms);
+  r["fill_ms"] = TimingJson(m.fill_ms);
   r["failed_items"] = m.failed;
   r["dropped_items"] = dropped_.load();
   r["corrections_applied"] = corrections_applied_;

@@ -7,6 +7,7 @@
 #include <mutex>
 
 #include "acquisition/errors.h"
+#include "pipeline/timing.h"
 
 namespace gf {
 namespace {
@@ -17,12 +18,6 @@ constexpr double kRadPerDeg = M_PI / 180.0;
 
 double Ms(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-json Timing(std::vector<double> ms) {
-  if (ms.empty()) return {{"median_ms", nullptr}, {"max_ms", nullptr}, {"count", 0}};
-  std::sort(ms.begin(), ms.end());
-  return {{"median_ms", ms[ms.size() / 2]}, {"max_ms", ms.back()}, {"count", ms.size()}};
 }
 
 // A refusal's reason without its figures ("too few RANSAC inliers (3 of 20 needed)" -> "too few
@@ -244,8 +239,8 @@ json LoopClosureStage::Report() const {
           {"pending_when_seen", pending_},
           {"refused", refused},
           {"optimisations", optimisations_},
-          {"optimisation_ms", Timing(optimise_ms_)},
-          {"keyframe_ms", Timing(keyframe_ms_)},
+          {"optimisation_ms", TimingJson(optimise_ms_)},
+          {"keyframe_ms", TimingJson(keyframe_ms_)},
           {"relocalisation", {{"attempts", relocalisation_attempts_.load()},
                               {"found", relocalised_.load()}}},
           {"database_bytes", database_.MemoryBytes()},

@@ -10,18 +10,13 @@
 #include "acquisition/errors.h"
 #include "pipeline/settings.h"
 #include "pipeline/stages.h"
+#include "pipeline/timing.h"
 
 namespace gf {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 using json = nlohmann::ordered_json;
-
-json StageStats(std::vector<double> ms) {
-  if (ms.empty()) return {{"median_ms", nullptr}, {"max_ms", nullptr}, {"count", 0}};
-  std::sort(ms.begin(), ms.end());
-  return {{"median_ms", ms[ms.size() / 2]}, {"max_ms", ms.back()}, {"count", ms.size()}};
-}
 
 // report.json (DESIGN.md's keys).
 json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
@@ -49,13 +44,13 @@ json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
   report["frames"] = summary.frames;
   report["fps"] = summary.fps;
   report["seconds"] = summary.seconds;
-  report["stages"] = {{"read", StageStats(tracking.read_ms)},
-                      {"track", StageStats(tracking.track_ms)}};
+  report["stages"] = {{"read", TimingJson(tracking.read_ms)},
+                      {"track", TimingJson(tracking.track_ms)}};
   if (fill) {
     std::vector<double> stereo_ms;  // per keyframe: stereo, validation and carry
     for (const KeyframeFill& k : fill->keyframes())
       if (!k.partner.empty()) stereo_ms.push_back(k.ms);
-    report["stages"]["stereo"] = StageStats(stereo_ms);
+    report["stages"]["stereo"] = TimingJson(stereo_ms);
   }
   if (fusion) {
     const json f = fusion->Report();
