@@ -36,8 +36,7 @@ std::string ReasonKind(const std::string& reason) {
 }  // namespace
 
 bool LoopStageOptions::Check(std::string* message) const {
-  if (queue_capacity < 1 || !(odometry_floor_sigma_m > 0) || !(odometry_floor_sigma_deg > 0) ||
-      !(gap_sigma_m > 0) || !(gap_sigma_deg > 0) || relocalise_candidates < 1) {
+  if (queue_capacity < 1 || !odometry_noise.Check() || !(gap_sigma_m > 0) || !(gap_sigma_deg > 0) || relocalise_candidates < 1) {
     if (message)
       *message = "loop closure: positive queue capacity, floors, gap sigmas and candidates";
     return false;
@@ -99,15 +98,15 @@ void LoopClosureStage::Run() {
   if (!cancelled_ && unoptimised_loops_) Optimise();
 }
 
-SE3 LoopClosureStage::AddNode(const LoopKeyframeItem& item) {
+SE3 LoopClosureStage::AddNode(const LoopKeyframeItem& item, double scene_depth_m) {
   using Link = LoopKeyframeItem::Link;
   tracked_[item.id] = item.world_from_camera;
   PoseGraphEdge edge;
   edge.to = item.id;
   edge.from = item.linked_to;
   edge.from_from_to = item.linked_from_this;
-  edge.information = InformationWithFloor(item.information, options_.odometry_floor_sigma_m,
-                                          options_.odometry_floor_sigma_deg * kRadPerDeg);
+  edge.information = AlignmentInformation(item.information, item.linked_from_this, scene_depth_m,
+                                          options_.odometry_noise);
   edge.kind = item.link == Link::kRelocalised ? PoseGraphEdge::Kind::kRelocalisation
                                               : PoseGraphEdge::Kind::kOdometry;
   if (item.link == Link::kRestarted || (item.link != Link::kFirst && !graph_.HasNode(edge.from))) {
@@ -132,7 +131,7 @@ SE3 LoopClosureStage::AddNode(const LoopKeyframeItem& item) {
 void LoopClosureStage::Process(const LoopKeyframeItem& item) {
   std::shared_ptr<const LoopKeyframe> key =
       MakeLoopKeyframe(item.id, item.frame, item.world_from_camera, item.features);
-  const SE3 estimate = AddNode(item);
+  const SE3 estimate = AddNode(item, key->median_depth_m);
   LoopDetection detection;
   {
     std::shared_lock<std::shared_mutex> lock(database_mutex_);

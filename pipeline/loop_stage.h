@@ -40,9 +40,8 @@ struct LoopStageOptions {
   PoseGraphOptions graph;
   int queue_capacity = 16;  // keyframes waiting for the loop search
   // Errors tracking's alignment information leaves out, added to its covariance for the odometry
-  // edges (as the loop verification's floor is for loops): per axis, metres and degrees.
-  double odometry_floor_sigma_m = 0.003;
-  double odometry_floor_sigma_deg = 0.2;
+  // edges (as detector.verification.noise is for loops; pose_graph.h).
+  AlignmentNoise odometry_noise;
   // A tracking restart links the new keyframe to the last good pose with this uncertainty.
   double gap_sigma_m = 0.5;
   double gap_sigma_deg = 30.0;
@@ -95,7 +94,7 @@ class LoopClosureStage : public Relocaliser {
   void Run();
   void Process(const LoopKeyframeItem& item);
   // Adds the keyframe's node and its link to the graph; returns the node's initial estimate.
-  SE3 AddNode(const LoopKeyframeItem& item);
+  SE3 AddNode(const LoopKeyframeItem& item, double scene_depth_m);
   void Optimise();
   void Record(const LoopKeyframeItem& item, const LoopDetection& detection);
 

@@ -59,9 +59,10 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixe
                                    normal_filter_px, normal_filter_depth_m, normal_baseline_px)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(KeyframeDatabaseOptions, words, vocabulary_keyframes,
                                    kmeans_iterations)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(AlignmentNoise, floor_m, floor_deg, bias)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopVerificationOptions, match, ransac, min_inlier_ratio,
                                    min_spread_m, icp, min_overlap, max_refine_m, max_refine_deg,
-                                   max_sigma_m, floor_sigma_m, floor_sigma_deg)
+                                   max_sigma_m, noise)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopDetectorOptions, recent_keyframes, appearance_candidates,
                                    min_appearance_score, proximity_candidates, proximity_m,
                                    proximity_deg, verification, confirm_m, confirm_deg,
@@ -69,8 +70,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopDetectorOptions, recent_keyframes, appear
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PoseGraphOptions, max_loop_chi2, loop_huber, max_iterations,
                                    max_rejections)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopStageOptions, database, detector, graph, queue_capacity,
-                                   odometry_floor_sigma_m, odometry_floor_sigma_deg, gap_sigma_m,
-                                   gap_sigma_deg, relocalise_candidates)
+                                   odometry_noise, gap_sigma_m, gap_sigma_deg,
+                                   relocalise_candidates)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionStageOptions, fusion, queue_capacity, count_every,
                                    fuse_carried)
 

@@ -68,7 +68,7 @@ double WeakestTranslationSigma(const Matrix6d& information) {
 bool LoopVerificationOptions::Check(std::string* message) const {
   if (!(min_inlier_ratio >= 0 && min_inlier_ratio <= 1) || !(min_spread_m >= 0) ||
       !(min_overlap >= 0 && min_overlap <= 1) || !(max_refine_m > 0) || !(max_refine_deg > 0) ||
-      !(max_sigma_m > 0) || !(floor_sigma_m > 0) || !(floor_sigma_deg > 0)) {
+      !(max_sigma_m > 0) || !noise.Check()) {
     if (message)
       *message = "loop verification: ratios and overlap in [0, 1], positive limits and floors";
     return false;
@@ -154,8 +154,8 @@ LoopVerification VerifyLoop(const LoopKeyframe& query, const LoopKeyframe& candi
   } else {
     v.success = true;
     v.candidate_from_query = v.icp.reference_from_current;
-    v.information = InformationWithFloor(v.icp.information, options.floor_sigma_m,
-                                         options.floor_sigma_deg / kDegPerRad);
+    v.information = AlignmentInformation(v.icp.information, v.candidate_from_query,
+                                         query.median_depth_m, options.noise);
   }
   return v;
 }

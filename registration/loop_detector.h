@@ -59,9 +59,8 @@ struct LoopVerificationOptions {
   double max_refine_deg = 3.0;    // ... and degrees
   double max_sigma_m = 0.01;      // ICP's translational standard deviation, weakest direction
   // Errors the alignment's own information leaves out (depth calibration, rolling shutter,
-  // correlated noise), added to its covariance for the pose graph: per axis, metres and degrees.
-  double floor_sigma_m = 0.003;
-  double floor_sigma_deg = 0.2;
+  // correlated noise), added to its covariance for the pose graph (pose_graph.h).
+  AlignmentNoise noise;
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -69,6 +69,23 @@ Matrix6d InformationWithFloor(const Matrix6d& alignment_information, double sigm
   return 0.5 * (information + information.transpose());
 }
 
+bool AlignmentNoise::Check(std::string* message) const {
+  if (!(floor_m > 0) || !(floor_deg > 0) || !(bias >= 0)) {
+    if (message) *message = "alignment noise: positive floors, bias >= 0";
+    return false;
+  }
+  return true;
+}
+
+Matrix6d AlignmentInformation(const Matrix6d& alignment_information, const SE3& relative,
+                              double scene_depth_m, const AlignmentNoise& noise) {
+  const double depth = std::max(scene_depth_m, 0.1);
+  const double viewpoint_change = relative.TranslationNorm() + depth * relative.RotationAngle();
+  const double sigma_m = noise.floor_m + noise.bias * viewpoint_change;
+  const double sigma_rad = noise.floor_deg * M_PI / 180.0 + noise.bias * viewpoint_change / depth;
+  return InformationWithFloor(alignment_information, sigma_m, sigma_rad);
+}
+
 void PoseGraph::AddNode(int id, const SE3& world_from_node) { poses_[id] = world_from_node; }
 
 void PoseGraph::AddEdge(const PoseGraphEdge& edge) {

@@ -80,6 +80,24 @@ Matrix6d Isotropic(double sigma_m, double sigma_rad) {
   return InformationWithFloor(Matrix6d::Identity() * 1e14, sigma_m, sigma_rad);
 }
 
+TEST(AlignmentInformation, GrowsWithTheChangeOfViewpoint) {
+  AlignmentNoise noise;
+  noise.floor_m = 0.003;
+  noise.floor_deg = 0.2;
+  noise.bias = 0.1;
+  const Matrix6d icp = Matrix6d::Identity() * 1e14;  // an alignment sure of itself
+  // 10 cm sideways and 3 degrees, over a scene 2 m away: a change of 0.1 + 2 * 0.052 m.
+  const SE3 relative = SE3::Exp((SE3::Tangent() << 0.1, 0, 0, 0, 3 * M_PI / 180, 0).finished());
+  const double change = relative.TranslationNorm() + 2.0 * relative.RotationAngle();
+  const Matrix6d covariance = AlignmentInformation(icp, relative, 2.0, noise).inverse();
+  EXPECT_NEAR(std::sqrt(covariance(0, 0)), 0.003 + 0.1 * change, 1e-6);
+  EXPECT_NEAR(std::sqrt(covariance(3, 3)), 0.2 * M_PI / 180 + 0.1 * change / 2.0, 1e-6);
+  // Without bias, the floor alone.
+  noise.bias = 0;
+  EXPECT_NEAR(std::sqrt(AlignmentInformation(icp, relative, 2.0, noise).inverse()(1, 1)), 0.003,
+              1e-6);
+}
+
 // A camera going round a 2 m circle in `n` keyframes, odometry drifting (a bias in yaw and
 // forward scale plus noise), the last keyframes closing the loop on the first.
 struct LoopScenario {
