@@ -30,12 +30,22 @@ int main(int argc, char** argv) {
       "GlassFusion: RGB-D scanning of scenes with glass and shiny objects; fills depth holes with "
       "stereo between keyframes."};
   app.require_subcommand(1);
-  bool verbose = false;
-  app.add_flag("-v,--verbose", verbose, "log progress details");
+  app.set_version_flag("--version", std::string("glassfusion ") + GF_VERSION);
+  // -v and --quiet are accepted before and after the subcommand (fallthrough).
+  bool verbose = false, quiet = false;
+  app.add_flag("-v,--verbose", verbose, "log each stage's decisions");
+  app.add_flag("-q,--quiet", quiet, "log errors only");
+  app.fallthrough();
   app.parse_complete_callback([&] {
     if (verbose) spdlog::set_level(spdlog::level::debug);
+    if (quiet) spdlog::set_level(spdlog::level::err);
   });
   gf::RegisterCommands(app);
+  for (CLI::App* sub : app.get_subcommands({})) sub->fallthrough();
+  if (argc == 1) {  // no arguments: the usage, as an error
+    std::fprintf(stderr, "%s", app.help().c_str());
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
