@@ -43,6 +43,21 @@ void AddInputArgs(CLI::App* cmd, InputArgs* args) {
                   "Redwood: depth subfolder (default depth/, else depth_noisy/)");
 }
 
+// --print-config: every setting as the JSON --config reads (with --config FILE applied when it
+// comes first), then exit 0. Runs while parsing, so that INPUT and --out are not needed.
+void AddPrintConfig(CLI::App* cmd, const std::string* config_file,
+                    const ReconstructionOptions* pipeline) {
+  cmd->add_flag_callback(
+      "--print-config",
+      [config_file, pipeline] {
+        ReconstructionOptions o = *pipeline;
+        if (!config_file->empty()) ApplyConfigFile(*config_file, &o);
+        std::cout << SettingsToJson(o).dump(2) << std::endl;
+        throw CLI::Success();
+      },
+      "print every setting as the JSON --config reads (after --config FILE) and exit");
+}
+
 void AddInfoCommand(CLI::App& app) {
   auto args = std::make_shared<InputArgs>();
   CLI::App* cmd = app.add_subcommand(
@@ -112,6 +127,7 @@ void AddReconstructCommand(CLI::App& app) {
   cmd->add_option("--config", options->config_file,
                   "JSON file of tracker and fill settings (the tree report.json lists under "
                   "config.settings; any part of it)");
+  AddPrintConfig(cmd, &options->config_file, &options->pipeline);
   cmd->add_flag("--force", options->force,
                 "replace the earlier run in --out (without it, a folder that is not empty is "
                 "refused)");
@@ -151,6 +167,7 @@ void AddCompareCommand(CLI::App& app) {
   cmd->add_option("--out", options->out_dir, "comparison folder")->required();
   cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
   cmd->add_option("--config", options->config_file, "JSON file of settings, as for reconstruct");
+  AddPrintConfig(cmd, &options->config_file, &options->pipeline);
   cmd->add_flag("--force", options->force, "replace an earlier comparison in --out");
   cmd->add_flag("--allow-lost", options->allow_lost,
                 "accept a run that loses tracking on most frames");
@@ -194,6 +211,7 @@ void AddBenchCommand(CLI::App& app) {
   auto config = std::make_shared<std::string>();
   cmd->add_option("--config", *config,
                   "JSON file of tracker and fill settings, as for reconstruct");
+  AddPrintConfig(cmd, config.get(), &options->pipeline);
   cmd->callback([options, args, range, no_peers, no_loops, config] {
     if (!config->empty()) ApplyConfigFile(*config, &options->pipeline);
     options->input = args->input;
