@@ -1,5 +1,6 @@
-// Terminal progress for long work: frames done, rate and time left, redrawn in place on stderr when
-// it is a terminal (one final line otherwise, so logs stay readable).
+// Terminal progress for long work: frames done, rate and time left, redrawn in place on stderr (the
+// line cleared each time), and a last line with the whole run's rate. Quiet when stderr is not a
+// terminal (logs and scripts read the command's own output instead).
 #pragma once
 
 #include <chrono>
@@ -13,8 +14,11 @@ class TerminalProgress {
   // label: what is being counted ("info", "reconstruct"); total: frames expected, if known.
   TerminalProgress(std::string label, std::optional<int> total);
   ~TerminalProgress();
-  void Update(int done);
+  // `detail` follows the counts (e.g. what is still finishing after the last frame).
+  void Update(int done, const std::string& detail = "");
   void Finish();
+  // The frames expected, once known better (a frame range of the input).
+  void SetTotal(std::optional<int> total) { total_ = total; }
 
  private:
   std::string label_;
@@ -22,6 +26,7 @@ class TerminalProgress {
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_draw_;
   int done_ = 0;
+  bool drawn_ = false;
   bool interactive_;
   bool finished_ = false;
 };

@@ -54,7 +54,22 @@ ReconstructionSummary RunPipeline(const ReconstructOptions& options, FrameSource
   Reconstruction reconstruction(pipeline);
   TerminalProgress progress(label, source->FrameCount());
   ReconstructionCallbacks callbacks;
-  callbacks.progress = [&](const ReconstructionProgress& p) { progress.Update(p.frames); };
+  callbacks.progress = [&](const ReconstructionProgress& p) {
+    // After the last frame, what is still finishing.
+    std::string detail;
+    if (p.tracking_done) {
+      detail = "finishing:";
+      if (pipeline.fill)
+        detail += " fill " + std::to_string(p.keyframes_filled) + "/" +
+                  std::to_string(p.keyframes_offered) + " keyframes,";
+      if (pipeline.loop_closure)
+        detail += " loop search " + std::to_string(p.keyframes_searched) + " keyframes,";
+      if (pipeline.fusion) detail += " fused " + std::to_string(p.frames_fused) + " frames,";
+      detail.pop_back();
+    }
+    progress.SetTotal(p.total);
+    progress.Update(p.frames, detail);
+  };
   callbacks.stop = [&]() -> std::string {
     if (!options.interrupt || !*options.interrupt) return "";
     return "interrupted by " + SignalName(*options.interrupt);
