@@ -83,12 +83,14 @@ void AddSynthCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "synth", "render a synthetic Kinect v1 glass scene with ground truth into a TUM folder");
   cmd->add_option("--scene", options->scene, "glass-table or shelf")->capture_default_str();
-  cmd->add_option("--frames", options->frames, "frames to render")->capture_default_str();
+  auto frames = std::make_shared<std::string>(std::to_string(options->frames));
+  cmd->add_option("--frames", *frames, "frames to render: N (or 0:N)")->capture_default_str();
   cmd->add_option("--seed", options->seed, "textures, trajectory and noise")
       ->capture_default_str();
   cmd->add_flag("--loop", options->loop, "trajectory comes back to its start");
   cmd->add_option("--out", *out, "folder to create")->required();
-  cmd->callback([options, out] {
+  cmd->callback([options, out, frames] {
+    options->frames = FrameCountOf(*frames, "synth");
     TerminalProgress progress("synth", options->frames);
     const synth::SynthSummary s =
         synth::GenerateDataset(*options, *out, [&](int done, int) { progress.Update(done); });
@@ -107,7 +109,7 @@ void AddReconstructCommand(CLI::App& app) {
       "DIR/trajectory.txt, map.ply, keyframes/, camera.json and report.json");
   AddInputArgs(cmd, args.get());
   cmd->add_option("--out", options->out_dir, "run folder")->required();
-  cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
+  cmd->add_option("--frames", *range, "frames A:B (A included, B excluded), A: from A, or N the first N");
   auto no_fill = std::make_shared<bool>(false);
   cmd->add_flag("--no-fill", *no_fill, "no stereo hole filling of keyframes (sensor depth only)");
   auto no_fusion = std::make_shared<bool>(false);
@@ -165,7 +167,7 @@ void AddCompareCommand(CLI::App& app) {
       "DIR/report.html (completeness per material where INPUT has ground truth)");
   AddInputArgs(cmd, args.get());
   cmd->add_option("--out", options->out_dir, "comparison folder")->required();
-  cmd->add_option("--frames", *range, "frame range A:B (A included, B excluded)");
+  cmd->add_option("--frames", *range, "frames A:B (A included, B excluded), A: from A, or N the first N");
   cmd->add_option("--config", options->config_file, "JSON file of settings, as for reconstruct");
   AddPrintConfig(cmd, &options->config_file, &options->pipeline);
   cmd->add_flag("--force", options->force, "replace an earlier comparison in --out");
@@ -193,7 +195,7 @@ void AddBenchCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "bench", "time GlassFusion's tracker and OpenCV's odometry peers on the same frames");
   AddInputArgs(cmd, args.get());
-  cmd->add_option("--frames", *range, "frame range A:B");
+  cmd->add_option("--frames", *range, "frames A:B (A included, B excluded), A: from A, or N the first N");
   cmd->add_option("--gt", options->gt, "ground truth (default: INPUT/groundtruth.txt or .log)");
   cmd->add_flag("--no-peers", *no_peers, "time GlassFusion only");
   cmd->add_option(
@@ -316,10 +318,14 @@ void AddCaptureCommand(CLI::App& app) {
          "dummy (OpenNI2's software device), openni2[:URI], freenect[:INDEX], or FILE.oni")
       ->required();
   cmd->add_option("--out", options->out_dir, "TUM folder to create")->required();
-  cmd->add_option("--frames", options->frames, "frames to record (0 = until the end or Ctrl-C)")
-      ->capture_default_str();
+  auto frames = std::make_shared<std::string>();
+  cmd->add_option("--frames", *frames, "frames to record: N (or 0:N); default until the end or "
+                                       "Ctrl-C");
   cmd->add_option("--camera", options->camera_file, "camera.json to use instead of the device's");
-  cmd->callback([options] { RunCapture(*options); });
+  cmd->callback([options, frames] {
+    if (!frames->empty()) options->frames = FrameCountOf(*frames, "capture");
+    RunCapture(*options);
+  });
 }
 
 void AddColmapExportCommand(CLI::App& app) {
@@ -360,14 +366,18 @@ void AddDemoCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "demo", "generate the built-in glass scene, measure its holes, write OUT/report.html");
   cmd->add_option("--out", options->out_dir, "output folder")->capture_default_str();
-  cmd->add_option("--frames", options->frames, "frames of the glass scene")
+  auto frames = std::make_shared<std::string>(std::to_string(options->frames));
+  cmd->add_option("--frames", *frames, "frames of the glass scene: N (or 0:N)")
       ->capture_default_str();
   cmd->add_option("--data", options->data_dir,
                   "folder of datasets to summarise too (default ../shared/datasets if present)");
   cmd->add_option("--config", options->config_file,
                   "JSON file of tracker and fill settings for the reconstruction, as for "
                   "reconstruct");
-  cmd->callback([options] { RunDemo(*options); });
+  cmd->callback([options, frames] {
+    options->frames = FrameCountOf(*frames, "demo");
+    RunDemo(*options);
+  });
 }
 
 }  // namespace

@@ -26,7 +26,6 @@ bool ReconstructOptions::Check(std::string* message) const {
 
 void ParseFrameRange(const std::string& range, int* first, int* end) {
   const size_t colon = range.find(':');
-  if (colon == std::string::npos) throw InputError("--frames", "expected A:B, A: or :B");
   // Whole numbers only: "1e3" must not silently read as 1.
   auto number = [&](const std::string& text, int if_empty) {
     if (text.empty()) return if_empty;
@@ -36,10 +35,25 @@ void ParseFrameRange(const std::string& range, int* first, int* end) {
       throw InputError("--frames", "\"" + range + "\" is not A:B with whole frame numbers");
     return value;
   };
+  if (colon == std::string::npos) {  // "N": the first N frames
+    *first = 0;
+    *end = number(range, -1);
+    if (*end <= 0) throw InputError("--frames", "\"" + range + "\" needs N >= 1 frames");
+    return;
+  }
   *first = number(range.substr(0, colon), 0);
   *end = number(range.substr(colon + 1), -1);
   if (*end >= 0 && *end <= *first)
     throw InputError("--frames", "\"" + range + "\" needs 0 <= A < B");
+}
+
+int FrameCountOf(const std::string& range, const std::string& command) {
+  int first = 0, end = -1;
+  ParseFrameRange(range, &first, &end);
+  if (first != 0 || end < 0)
+    throw InputError("--frames", command + " starts at frame 0: give N or 0:N, not \"" + range +
+                                     "\"");
+  return end;
 }
 
 ReconstructionSummary RunPipeline(const ReconstructOptions& options, FrameSource* source,

@@ -32,9 +32,11 @@ struct ReconstructOptions {
   bool Check(std::string* message = nullptr) const;
 };
 
-// Parses "A:B", "A:" or ":B" (whole non-negative frame numbers) into first/end frame. Throws
-// InputError on anything else ("1e3:2000", "5:3", "a:b").
+// --frames, the same in every command: "A:B" frames A to B-1, "A:" from A, ":B" or "B" the first
+// B (whole non-negative numbers). Throws InputError for anything else ("1e3:2000", "5:3", "a:b").
 void ParseFrameRange(const std::string& range, int* first, int* end);
+// --frames of a command that makes frames from 0 (synth, capture, demo): "N" or "0:N" -> N.
+int FrameCountOf(const std::string& range, const std::string& command);
 
 ReconstructionSummary RunReconstruct(const ReconstructOptions& options);
 
