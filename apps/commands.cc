@@ -64,6 +64,9 @@ void AddInfoCommand(CLI::App& app) {
       "info",
       "print JSON about INPUT: source kind, frames, size, intrinsics, depth convention, "
       "hole fraction");
+  cmd->footer(
+      "Example: glassfusion info tum_fr1_xyz\nWrites: JSON on stdout (source kind, frames, size, "
+      "intrinsics, depth convention, hole fraction by class, median depth, warnings).");
   AddInputArgs(cmd, args.get());
   cmd->callback([args] {
     TerminalProgress progress("info", std::nullopt);
@@ -71,8 +74,7 @@ void AddInfoCommand(CLI::App& app) {
         InputInfo(args->input, args->ToOptions(), [&](int done, int) { progress.Update(done); });
     progress.Finish();
     for (const auto& w : info["warnings"])
-      std::fprintf(stderr, "warning: %s: %s\n", args->input.c_str(),
-                   w.get<std::string>().c_str());
+      std::fprintf(stderr, "warning: %s: %s\n", args->input.c_str(), w.get<std::string>().c_str());
     std::cout << info.dump(2) << std::endl;
   });
 }
@@ -82,11 +84,14 @@ void AddSynthCommand(CLI::App& app) {
   auto out = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(
       "synth", "render a synthetic Kinect v1 glass scene with ground truth into a TUM folder");
+  cmd->footer(
+      "Example: glassfusion synth --scene shelf --frames 30 --seed 6 --out shelf6\nWrites: "
+      "OUT/rgb, depth, raw (Kinect v1 11-bit PGM), rgb.txt, depth.txt, camera.json, "
+      "groundtruth.txt, gt/ (true depth, materials), scene.ply.");
   cmd->add_option("--scene", options->scene, "glass-table or shelf")->capture_default_str();
   auto frames = std::make_shared<std::string>(std::to_string(options->frames));
   cmd->add_option("--frames", *frames, "frames to render: N (or 0:N)")->capture_default_str();
-  cmd->add_option("--seed", options->seed, "textures, trajectory and noise")
-      ->capture_default_str();
+  cmd->add_option("--seed", options->seed, "textures, trajectory and noise")->capture_default_str();
   cmd->add_flag("--loop", options->loop, "trajectory comes back to its start");
   cmd->add_option("--out", *out, "folder to create")->required();
   cmd->callback([options, out, frames] {
@@ -107,9 +112,14 @@ void AddReconstructCommand(CLI::App& app) {
       "reconstruct",
       "track the camera through INPUT and fill keyframe depth holes by stereo; write "
       "DIR/trajectory.txt, map.ply, keyframes/, camera.json and report.json");
+  cmd->footer(
+      "Example: glassfusion reconstruct tum_fr1_xyz --out run --frames 0:300\nWrites: "
+      "DIR/trajectory.txt (TUM), map.ply (surfels), keyframes/ (hole masks, filled depth, "
+      "overlays), camera.json, report.json; --mesh also mesh.ply.");
   AddInputArgs(cmd, args.get());
   cmd->add_option("--out", options->out_dir, "run folder")->required();
-  cmd->add_option("--frames", *range, "frames A:B (A included, B excluded), A: from A, or N the first N");
+  cmd->add_option("--frames", *range,
+                  "frames A:B (A included, B excluded), A: from A, or N the first N");
   auto no_fill = std::make_shared<bool>(false);
   cmd->add_flag("--no-fill", *no_fill, "no stereo hole filling of keyframes (sensor depth only)");
   auto no_fusion = std::make_shared<bool>(false);
@@ -165,9 +175,13 @@ void AddCompareCommand(CLI::App& app) {
       "track INPUT once and fuse it twice, with and without the stereo fill; write "
       "DIR/with_fill/, DIR/without_fill/ (run folders with map.ply), DIR/compare.json and "
       "DIR/report.html (completeness per material where INPUT has ground truth)");
+  cmd->footer(
+      "Example: glassfusion compare shelf6 --out cmp\nWrites: DIR/with_fill/ and DIR/without_fill/ "
+      "(run folders), DIR/compare.json, DIR/report.html.");
   AddInputArgs(cmd, args.get());
   cmd->add_option("--out", options->out_dir, "comparison folder")->required();
-  cmd->add_option("--frames", *range, "frames A:B (A included, B excluded), A: from A, or N the first N");
+  cmd->add_option("--frames", *range,
+                  "frames A:B (A included, B excluded), A: from A, or N the first N");
   cmd->add_option("--config", options->config_file, "JSON file of settings, as for reconstruct");
   AddPrintConfig(cmd, &options->config_file, &options->pipeline);
   cmd->add_flag("--force", options->force, "replace an earlier comparison in --out");
@@ -194,14 +208,17 @@ void AddBenchCommand(CLI::App& app) {
   auto no_peers = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand(
       "bench", "time GlassFusion's tracker and OpenCV's odometry peers on the same frames");
+  cmd->footer(
+      "Example: glassfusion bench tum_fr1_xyz_head --fill-every 3\nWrites: a table and JSON on "
+      "stdout: ms per frame, fps and ATE per method, the machine's cores, the loop stage's cost.");
   AddInputArgs(cmd, args.get());
-  cmd->add_option("--frames", *range, "frames A:B (A included, B excluded), A: from A, or N the first N");
+  cmd->add_option("--frames", *range,
+                  "frames A:B (A included, B excluded), A: from A, or N the first N");
   cmd->add_option("--gt", options->gt, "ground truth (default: INPUT/groundtruth.txt or .log)");
   cmd->add_flag("--no-peers", *no_peers, "time GlassFusion only");
-  cmd->add_option(
-      "--fill-every", options->fill_every,
-      "also time stereo hole filling on one core, every K-th frame a keyframe, paired "
-      "and filled as reconstruct does with the tracked poses (0: off)");
+  cmd->add_option("--fill-every", options->fill_every,
+                  "also time stereo hole filling on one core, every K-th frame a keyframe, paired "
+                  "and filled as reconstruct does with the tracked poses (0: off)");
   cmd->add_flag("--frame-to-model", options->frame_to_model,
                 "also our tracker refined against the surfel map of the frames before each one");
   auto no_loops = std::make_shared<bool>(false);
@@ -258,6 +275,9 @@ void AddEvalCommand(CLI::App& app) {
   auto options = std::make_shared<TrajectoryErrorOptions>();
   CLI::App* cmd = app.add_subcommand(
       "eval", "trajectory error of --est against --gt as JSON (ATE after rigid alignment, RPE)");
+  cmd->footer(
+      "Example: glassfusion eval --gt cap/groundtruth.txt --est run/trajectory.txt\nWrites: JSON "
+      "on stdout (ATE, RPE; with --map and --gt-mesh, accuracy and completeness per material).");
   cmd->add_option("--gt", *gt, "ground truth: TUM text or Redwood .log")->required();
   cmd->add_option("--est", *est, "estimate: TUM text or Redwood .log")->required();
   cmd->add_option("--max-dt", options->max_dt, "association window, seconds")
@@ -313,14 +333,17 @@ void AddCaptureCommand(CLI::App& app) {
   auto options = std::make_shared<CaptureOptions>();
   CLI::App* cmd = app.add_subcommand(
       "capture", "record a device (or .oni file) to a TUM-format folder for offline processing");
-  cmd->add_option(
-         "--device", options->device,
-         "dummy (OpenNI2's software device), openni2[:URI], freenect[:INDEX], or FILE.oni")
+  cmd->footer(
+      "Example: glassfusion capture --device freenect --out cap --frames 300\nWrites: OUT as a TUM "
+      "folder (rgb/, depth/, rgb.txt, depth.txt, camera.json).");
+  cmd->add_option("--device", options->device,
+                  "dummy (OpenNI2's software device), openni2[:URI], freenect[:INDEX], or FILE.oni")
       ->required();
   cmd->add_option("--out", options->out_dir, "TUM folder to create")->required();
   auto frames = std::make_shared<std::string>();
-  cmd->add_option("--frames", *frames, "frames to record: N (or 0:N); default until the end or "
-                                       "Ctrl-C");
+  cmd->add_option("--frames", *frames,
+                  "frames to record: N (or 0:N); default until the end or "
+                  "Ctrl-C");
   cmd->add_option("--camera", options->camera_file, "camera.json to use instead of the device's");
   cmd->callback([options, frames] {
     if (!frames->empty()) options->frames = FrameCountOf(*frames, "capture");
@@ -335,6 +358,9 @@ void AddColmapExportCommand(CLI::App& app) {
       "colmap-export",
       "write a COLMAP workspace (images/, sparse/ text model with the tracked keyframe poses) "
       "from a reconstruct run");
+  cmd->footer(
+      "Example: glassfusion colmap-export run --out ws\nWrites: a COLMAP workspace (images, sparse "
+      "model with the keyframe poses).");
   cmd->add_option("RUN_DIR", *run_dir, "folder written by `glassfusion reconstruct`")->required();
   cmd->add_option("--out", *workspace, "workspace folder to create")->required();
   cmd->callback([run_dir, workspace] {
@@ -351,6 +377,9 @@ void AddColmapImportCommand(CLI::App& app) {
       "colmap-import",
       "read COLMAP's refined poses (text model) and patch_match_stereo depth maps back into a "
       "run: RUN_DIR/trajectory_colmap.txt, holes filled in keyframes/, colmap_import.json");
+  cmd->footer(
+      "Example: glassfusion colmap-import ws --into run\nWrites: COLMAP's refined poses and depth "
+      "maps into the run folder.");
   cmd->add_option("WORKSPACE", *workspace, "COLMAP workspace made by colmap-export")->required();
   cmd->add_option("--into", *run_dir, "the reconstruct run folder")->required();
   cmd->add_option("--model", options->model_dir,
@@ -365,6 +394,8 @@ void AddDemoCommand(CLI::App& app) {
   auto options = std::make_shared<DemoOptions>();
   CLI::App* cmd = app.add_subcommand(
       "demo", "generate the built-in glass scene, measure its holes, write OUT/report.html");
+  cmd->footer(
+      "Example: glassfusion demo --out demo-out\nWrites: OUT/report.html and the runs it shows.");
   cmd->add_option("--out", options->out_dir, "output folder")->capture_default_str();
   auto frames = std::make_shared<std::string>(std::to_string(options->frames));
   cmd->add_option("--frames", *frames, "frames of the glass scene: N (or 0:N)")
