@@ -81,7 +81,7 @@ ColmapExportSummary RunColmapExport(const std::string& run_dir, const std::strin
                   fs::path(staging) / "images" / image.name);
     images.push_back(image);
   }
-  WriteColmapTextModel((fs::path(staging) / "sparse").string(), camera.camera, images);
+  WriteColmapTextModel((fs::path(staging) / "sparse" / "0").string(), camera.camera, images);
   PublishFolder(staging, workspace);
   ColmapExportSummary summary;
   summary.images = static_cast<int>(images.size());

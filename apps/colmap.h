@@ -2,8 +2,9 @@
 //
 // Export writes a COLMAP workspace from a reconstruct run: WS/images/<NNNNNN>_<ts>.png (the
 // keyframes' colour images; names sort in keyframe order, so `colmap feature_extractor` gives
-// them the image ids of the model) and WS/sparse/{cameras,images,points3D}.txt with the tracked
-// keyframe poses (one FULL_OPENCV camera, no points: `colmap point_triangulator` makes them).
+// them the image ids of the model) and WS/sparse/0/{cameras,images,points3D}.txt, COLMAP's usual
+// layout, with the tracked keyframe poses (one FULL_OPENCV camera carrying the input's lens
+// distortion, as the images are the input's own; no points: `colmap point_triangulator` makes them).
 // The workspace folder appears only when complete.
 //
 // Import reads back what COLMAP made:

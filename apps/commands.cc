@@ -356,11 +356,12 @@ void AddColmapExportCommand(CLI::App& app) {
   auto workspace = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(
       "colmap-export",
-      "write a COLMAP workspace (images/, sparse/ text model with the tracked keyframe poses) "
+      "write a COLMAP workspace (images/, sparse/0/ text model with the tracked keyframe poses) "
       "from a reconstruct run");
   cmd->footer(
-      "Example: glassfusion colmap-export run --out ws\nWrites: a COLMAP workspace (images, sparse "
-      "model with the keyframe poses).");
+      "Example: glassfusion colmap-export run --out ws\nWrites: WS/images/ (the keyframes' colour, "
+      "as the input's camera saw it) and WS/sparse/0/ (cameras.txt: one FULL_OPENCV camera with "
+      "the input's distortion; images.txt: the keyframe poses; points3D.txt empty).");
   cmd->add_option("RUN_DIR", *run_dir, "folder written by `glassfusion reconstruct`")->required();
   cmd->add_option("--out", *workspace, "workspace folder to create")->required();
   cmd->callback([run_dir, workspace] {

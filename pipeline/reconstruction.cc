@@ -223,16 +223,10 @@ ReconstructionSummary Reconstruction::Summarise(const FrameSource& source, const
   return summary;
 }
 
-void Reconstruction::WriteOutputs(const FrameSource& source, const Stages& s, RunSink* sink,
-                                  RunSink* without_fill, ReconstructionSummary* summary) const {
+void Reconstruction::WriteOutputs(const Stages& s, RunSink* sink, RunSink* without_fill,
+                                  ReconstructionSummary* summary) const {
   const Trajectory trajectory = CorrectedTrajectory(s.tracker->record(), s.corrections);
   sink->WriteTrajectory(trajectory);
-  // The camera of the run's images (frames arrive registered to colour; keyframe depth PNGs are
-  // millimetres), for colmap-export and other readers of the run folder.
-  CameraFile run_camera;
-  run_camera.camera = source.camera();
-  run_camera.depth_scale = 1000.0;
-  sink->WriteCamera(run_camera);
   sink->WriteReport(summary->report);
   if (!without_fill) return;
   // The same tracking, fused without the fill: its own map and surfels, no fill.
@@ -242,7 +236,6 @@ void Reconstruction::WriteOutputs(const FrameSource& source, const Stages& s, Ru
   summary->report_without_fill["fill"] = nullptr;
   summary->report_without_fill["surfels"] = s.fusion->Report(1);
   without_fill->WriteTrajectory(trajectory);
-  without_fill->WriteCamera(run_camera);
   without_fill->WriteReport(summary->report_without_fill);
 }
 
@@ -260,6 +253,13 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
     progress.total = std::max(0, last - options_.first_frame);
   }
   const bool live = !progress.total.has_value();  // live input: tracking never waits
+  // The camera of the run's images first (frames arrive registered to colour; keyframe depth PNGs
+  // are millimetres): the sink needs it for the keyframes it writes, a partial run has it too.
+  CameraFile run_camera;
+  run_camera.camera = source.camera();
+  run_camera.depth_scale = 1000.0;
+  sink->WriteCamera(run_camera);
+  if (without_fill) without_fill->WriteCamera(run_camera);
   std::unique_ptr<Stages> s = MakeStages(source, sink, without_fill, live);
   std::string stop_reason;
   // Progress and stop requests, from this thread; true once a stop was asked for.
@@ -292,7 +292,7 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
     error = std::make_exception_ptr(InputError(source.Input(), "no frames in the selected range"));
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   ReconstructionSummary summary = Summarise(source, *s, error, stop_reason, seconds);
-  WriteOutputs(source, *s, sink, without_fill, &summary);
+  WriteOutputs(*s, sink, without_fill, &summary);
   poll();
   if (error) std::rethrow_exception(error);
   return summary;

@@ -119,8 +119,8 @@ class Reconstruction {
   ReconstructionSummary Summarise(const FrameSource& source, const Stages& s,
                                   const std::exception_ptr& error, const std::string& stop_reason,
                                   double seconds) const;
-  void WriteOutputs(const FrameSource& source, const Stages& s, RunSink* sink,
-                    RunSink* without_fill, ReconstructionSummary* summary) const;
+  void WriteOutputs(const Stages& s, RunSink* sink, RunSink* without_fill,
+                    ReconstructionSummary* summary) const;
   ReconstructionOptions options_;
 };
 

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <opencv2/imgproc.hpp>
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
@@ -25,7 +27,7 @@ cv::Mat ToMillimetres(const cv::Mat& depth_m) {
 }
 
 bool LooksLikeRun(const fs::path& dir) {
-  for (const char* name : {"report.json", "trajectory.txt", "keyframes", "camera.json", "map.ply"})
+  for (const char* name : {"report.json", "trajectory.txt", "keyframes", "camera.json", "map.ply", "undistorted"})
     if (fs::exists(dir / name)) return true;
   return false;
 }
@@ -85,18 +87,67 @@ void FolderRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& fram
   const std::string base = (folder / name).string();
   WriteImage(base + ".hole_mask.png", frame.hole_mask);
   WriteImage(base + ".depth_filled.png", ToMillimetres(fill.filled_depth));
-  if (frame.color.type() == CV_8UC3 && frame.color.size() == frame.depth.size()) {
+  const bool has_color = frame.color.type() == CV_8UC3 && frame.color.size() == frame.depth.size();
+  if (has_color) {
     WriteImage(base + ".fill_overlay.png", FillOverlay(frame.color, fill));
     WriteImage(base + ".color.png", frame.color);  // for colmap-export
   }
+  // The pinhole set (undistorted/), colour and depth under the same file name.
+  char index[16];
+  std::snprintf(index, sizeof(index), "%06d", frame.index);
+  const std::string file =
+      std::string(index) + (frame.timestamp_text.empty() ? "" : "_" + frame.timestamp_text) + ".png";
+  const fs::path pinhole = fs::path(out_dir_) / "undistorted";
+  for (const char* sub : {"color", "depth"}) fs::create_directories(pinhole / sub, ec);
+  if (ec) throw InputError(pinhole.string(), "cannot create folder: " + ec.message());
+  auto undistort = [&](const cv::Mat& image, int interpolation) {
+    if (undistort_x_.empty()) return image;
+    cv::Mat out;
+    cv::remap(image, out, undistort_x_, undistort_y_, interpolation, cv::BORDER_CONSTANT, 0);
+    return out;
+  };
+  WriteImage((pinhole / "depth" / file).string(),
+             undistort(ToMillimetres(fill.filled_depth), cv::INTER_NEAREST));
+  if (has_color)
+    WriteImage((pinhole / "color" / file).string(), undistort(frame.color, cv::INTER_LINEAR));
+  std::lock_guard<std::mutex> lock(mutex_);
+  keyframes_[frame.index] = name;
 }
 
 void FolderRunSink::WriteTrajectory(const Trajectory& trajectory) {
   WriteTumTrajectory((fs::path(out_dir_) / "trajectory.txt").string(), trajectory);
+  std::map<std::string, SE3> poses;
+  for (const StampedPose& p : trajectory)
+    poses[p.timestamp_text.empty() ? std::to_string(static_cast<long>(p.timestamp))
+                                   : p.timestamp_text] = p.world_from_camera;
+  Trajectory keyframes;  // undistorted/trajectory.log: entry k is the k-th file, by name
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const auto& [index, name] : keyframes_) {
+    const auto pose = poses.find(name);
+    if (pose == poses.end()) continue;  // a keyframe whose pose the run did not keep
+    keyframes.push_back({static_cast<double>(keyframes.size()), "", pose->second});
+  }
+  if (!keyframes.empty())
+    WriteRedwoodLog((fs::path(out_dir_) / "undistorted" / "trajectory.log").string(), keyframes);
 }
 
 void FolderRunSink::WriteCamera(const CameraFile& camera) {
   SaveCameraFile((fs::path(out_dir_) / "camera.json").string(), camera);
+  undistort_x_ = undistort_y_ = cv::Mat();
+  if (camera.camera.HasDistortion()) camera.camera.UndistortionMaps(&undistort_x_, &undistort_y_);
+  CameraFile pinhole = camera;
+  pinhole.camera.distortion = {0, 0, 0, 0, 0};
+  const fs::path dir = fs::path(out_dir_) / "undistorted";
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw InputError(dir.string(), "cannot create folder: " + ec.message());
+  SaveCameraFile((dir / "camera.json").string(), pinhole);
+  const Camera& c = pinhole.camera;
+  const nlohmann::ordered_json open3d = {
+      {"width", c.width},
+      {"height", c.height},
+      {"intrinsic_matrix", {c.fx, 0.0, 0.0, 0.0, c.fy, 0.0, c.cx, c.cy, 1.0}}};  // column-major
+  WriteTextFileAtomically((dir / "camera_intrinsic.json").string(), open3d.dump(2) + "\n");
 }
 
 void FolderRunSink::WriteReport(const nlohmann::ordered_json& report) {

@@ -8,10 +8,18 @@
 //   <ts>.fill_overlay.png  colour image, filled pixels green (cyan: carried from earlier
 //                          keyframes; brighter = more confident), holes still empty magenta
 //   <ts>.color.png         the keyframe's colour image (lossless; colmap-export uses it)
+// These keep the input's image geometry (its lens distortion, as camera.json states). The same
+// keyframes on the ideal pinhole camera, as an Open3D / Redwood dataset folder, are in undistorted/:
+//   color/<index>_<ts>.png  colour, undistorted (bilinear); <index> is the frame's, 6 digits
+//   depth/<index>_<ts>.png  filled depth (16-bit millimetres, 0 = none), undistorted (nearest)
+//   camera.json             the pinhole camera (no distortion), depth_scale 1000
+//   camera_intrinsic.json   the same as Open3D's PinholeCameraIntrinsic JSON
+//   trajectory.log          the keyframes' world_from_camera in file order (Redwood / Open3D .log)
 // Every file is written atomically (a temporary name, then renamed), so an interrupted run never
 // leaves a truncated file that looks complete.
 //
-// Thread-safety: WriteKeyframe may be called from one thread while another calls the rest.
+// Thread-safety: WriteCamera comes first; then WriteKeyframe may be called from one thread while
+// another calls the rest.
 #pragma once
 
 #include <map>
@@ -62,6 +70,10 @@ class FolderRunSink : public RunSink {
 
  private:
   std::string out_dir_;
+  // cv::remap maps onto the pinhole camera, set by WriteCamera; empty: no distortion.
+  cv::Mat undistort_x_, undistort_y_;
+  std::mutex mutex_;
+  std::map<int, std::string> keyframes_;  // written keyframes: frame index -> KeyframeName
 };
 
 // Keeps everything in memory, for tests.

@@ -22,7 +22,7 @@ endfunction()
 run("${GLASSFUSION}" synth --scene glass-table --frames 12 --seed 5 --out "${work}/scene")
 run("${GLASSFUSION}" reconstruct "${work}/scene" --out "${work}/run")
 run("${GLASSFUSION}" colmap-export "${work}/run" --out "${work}/ws")
-file(STRINGS "${work}/ws/sparse/cameras.txt" camera REGEX "^1 ")
+file(STRINGS "${work}/ws/sparse/0/cameras.txt" camera REGEX "^1 ")
 string(REPLACE " " ";" fields "${camera}")
 list(SUBLIST fields 4 -1 params)
 string(REPLACE ";" "," params "${params}")
@@ -35,7 +35,7 @@ run("${COLMAP}" feature_extractor --database_path "${work}/ws/database.db"
 run("${COLMAP}" exhaustive_matcher --database_path "${work}/ws/database.db" --SiftMatching.use_gpu 0)
 file(MAKE_DIRECTORY "${work}/ws/triangulated" "${work}/ws/adjusted" "${work}/ws/refined")
 run("${COLMAP}" point_triangulator --database_path "${work}/ws/database.db"
-    --image_path "${work}/ws/images" --input_path "${work}/ws/sparse"
+    --image_path "${work}/ws/images" --input_path "${work}/ws/sparse/0"
     --output_path "${work}/ws/triangulated")
 run("${COLMAP}" bundle_adjuster --input_path "${work}/ws/triangulated"
     --output_path "${work}/ws/adjusted" --BundleAdjustment.refine_focal_length 0
