@@ -6,14 +6,15 @@ DEMO_OUT  ?= demo-out
 JOBS      ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-# Every Debian (bookworm) package the build, the tests and the measuring scripts need.
+# Every Debian (bookworm) package the build, the tests and the measuring scripts need (chromium:
+# the test that renders the demo report in a headless browser).
 DEB_PACKAGES := cmake make g++ pkg-config \
   libopencv-dev libeigen3-dev libceres-dev libpcl-dev \
   libopenni2-dev libfreenect-dev \
   libcli11-dev nlohmann-json3-dev libspdlog-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
   python3-numpy python3-opencv python3-open3d \
-  colmap
+  colmap chromium
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 

@@ -1,5 +1,6 @@
 #include "apps/compare.h"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
 #include "apps/report_html.h"
+#include "apps/run_report.h"
 #include "surfels/completeness.h"
 #include "surfels/ply.h"
 #include "surfels/render.h"
@@ -82,72 +84,50 @@ std::string Percent(const json& share) {
 }
 
 // Both maps rendered from the same two viewpoints: the middle frame's, and looking down on the map
-// from above and behind that camera.
-std::vector<std::pair<std::string, std::string>> Renderings(const std::string& out_dir,
-                                                            const Camera& camera,
-                                                            const Trajectory& trajectory) {
+// from above and behind that camera. Written as DIR/<map>_<view>.png.
+void WriteRenderings(const std::string& out_dir, const Camera& camera,
+                     const Trajectory& trajectory) {
   const std::vector<Surfel> with =
       ReadSurfelPly((fs::path(out_dir) / "with_fill/map.ply").string());
   const std::vector<Surfel> without =
       ReadSurfelPly((fs::path(out_dir) / "without_fill/map.ply").string());
-  if (trajectory.empty() || with.empty()) return {};
+  if (trajectory.empty() || with.empty()) return;
   const SE3 middle = trajectory[trajectory.size() / 2].world_from_camera;
   const Eigen::Matrix3d r = middle.RotationMatrix();
   const SE3 above = ViewOfMap(with, camera, r * Eigen::Vector3d(0, 0.8, 0.6), -r.col(1));
-  std::vector<std::pair<std::string, std::string>> images;
   for (const auto& [pose, view] : {std::pair{middle, "camera"}, std::pair{above, "above"}})
     for (const auto& [map, name] :
-         {std::pair{&with, "with_fill"}, std::pair{&without, "without_fill"}}) {
-      const std::string file = std::string(name) + "_" + view + ".png";
-      WriteImage((fs::path(out_dir) / file).string(), RenderSurfels(*map, camera, pose, {}).color);
-      images.push_back({file, std::string(name == std::string("with_fill") ? "with" : "without") +
-                                  " the fill, seen from " +
-                                  (view == std::string("camera") ? "the middle frame" : "above")});
+         {std::pair{&with, "with_fill"}, std::pair{&without, "without_fill"}})
+      WriteImage((fs::path(out_dir) / (std::string(name) + "_" + view + ".png")).string(),
+                 RenderSurfels(*map, camera, pose, {}).color);
+}
+
+// The renderings that exist, with their captions, as seen from the report (prefix + name).
+std::vector<std::pair<std::string, std::string>> Renderings(const std::string& out_dir,
+                                                            const std::string& prefix,
+                                                            const std::string& middle_frame) {
+  std::vector<std::pair<std::string, std::string>> images;
+  for (const std::string view : {"camera", "above"})
+    for (const std::string map : {"with_fill", "without_fill"}) {
+      const std::string file = map + "_" + view + ".png";
+      if (!IsRegularFile((fs::path(out_dir) / file).string())) continue;
+      images.push_back(
+          {prefix + file, std::string(map == "with_fill" ? "with" : "without") +
+                              " the fill, seen from " +
+                              (view == "camera" ? middle_frame + "'s viewpoint" : "above")});
     }
   return images;
 }
 
-void WriteReport(const std::string& out_dir, const std::string& input, const json& compare,
-                 const std::vector<std::pair<std::string, std::string>>& images) {
-  HtmlReport r("GlassFusion: the model with and without the stereo fill");
-  r.Paragraph("Input: " + input +
-              ". One tracking run, fused twice: the sensor's depth with the "
-              "keyframes' stereo fills (with_fill/) and without them (without_fill/).");
+std::vector<std::vector<std::string>> CompletenessRows(const json& compare, const char* within) {
   std::vector<std::vector<std::string>> rows;
-  for (const char* v : {"with_fill", "without_fill"}) {
-    const json& s = compare[v]["surfels"];
-    rows.push_back({v, std::to_string(s["count"].get<long>()),
-                    std::to_string(s["by_source"]["sensor"].get<long>()),
-                    std::to_string(s["by_source"]["stereo_fill"].get<long>())});
-  }
-  r.Table({"map", "surfels", "from the sensor", "from the stereo fill"}, rows);
-  std::vector<PlotSeries> series;
-  for (const auto& [v, color] : {std::pair{"with_fill", "#1b7837"}, {"without_fill", "#762a83"}}) {
-    PlotSeries s{v, color, {}};
-    for (const json& c : compare[v]["surfels"]["count_over_time"])
-      s.points.push_back({c["frame"].get<double>(), c["stable"].get<double>()});
-    series.push_back(s);
-  }
-  r.Figure(LinePlotSvg(series, "frame", "stable surfels"),
-           "The model's size as the capture goes on");
-  if (compare["with_fill"].contains("completeness")) {
-    std::vector<std::vector<std::string>> table;
-    const json& w = compare["with_fill"]["completeness"];
-    const json& wo = compare["without_fill"]["completeness"];
-    table.push_back({"all observed", Percent(w["overall"]["within_2cm"]),
-                     Percent(wo["overall"]["within_2cm"])});
-    for (const auto& [name, c] : w["per_material"].items())
-      table.push_back(
-          {name, Percent(c["within_2cm"]), Percent(wo["per_material"][name]["within_2cm"])});
-    r.Heading("Completeness against the ground truth");
-    r.Table({"surface", "within 2 cm, with fill", "without fill"}, table);
-  }
-  if (!images.empty()) {
-    r.Heading("The two models");
-    r.Images(images, 440);
-  }
-  r.Preformatted(compare.dump(2));
-  WriteTextFileAtomically((fs::path(out_dir) / "report.html").string(), r.Html());
+  const json& w = compare["with_fill"]["completeness"];
+  const json& wo = compare["without_fill"]["completeness"];
+  rows.push_back({"all observed surfaces", Percent(w["overall"][within]),
+                  Percent(wo["overall"][within])});
+  for (const auto& [name, c] : w["per_material"].items())
+    rows.push_back({name, Percent(c[within]), Percent(wo["per_material"][name][within])});
+  return rows;
 }
 
 // compare.json's ground-truth part for the map at map_path, whose run followed `est`.
@@ -241,10 +221,75 @@ CompareSummary RunCompare(const ReconstructOptions& given) {
     c["ate_m"] = truth["ate_m"];
   }
   WriteTextFileAtomically((out / "compare.json").string(), c.dump(2) + "\n");
-  const Trajectory trajectory = ReadTumTrajectory((out / "with_fill/trajectory.txt").string());
-  WriteReport(options.out_dir, options.input, c,
-              Renderings(options.out_dir, source->camera(), trajectory));
+  WriteRenderings(options.out_dir, source->camera(),
+                  ReadTumTrajectory((out / "with_fill/trajectory.txt").string()));
+  HtmlReport r("GlassFusion: the model with and without the stereo fill");
+  AddComparisonSections(&r, options.out_dir, "");
+  WriteTextFileAtomically((out / "report.html").string(), r.Html());
   return summary;
+}
+
+void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std::string& prefix) {
+  const fs::path dir(out_dir);
+  const json c = json::parse(ReadTextFile((dir / "compare.json").string()));
+  const json run = json::parse(ReadTextFile((dir / "with_fill/report.json").string()));
+  const std::string input = c["input"];
+  const Trajectory estimate = ReadTumTrajectory((dir / "with_fill/trajectory.txt").string());
+  Trajectory truth;
+  if (IsRegularFile((fs::path(input) / "groundtruth.txt").string()))
+    truth = ReadTrajectory((fs::path(input) / "groundtruth.txt").string());
+  const double ate = c.value("ate_m", 0.0);
+  r->Paragraph("Input: " + input +
+               ". One tracking run, fused twice: the sensor's depth with the keyframes' stereo "
+               "fills (with_fill/) and without them (without_fill/). " +
+               RunSummaryText(run, c.contains("ate_m") ? &ate : nullptr));
+  r->Heading("The two models");
+  const StampedPose& middle = estimate[estimate.size() / 2];
+  char label[32];
+  std::snprintf(label, sizeof(label), "%06d_",
+                run["input"].value("first_frame", 0) + static_cast<int>(estimate.size() / 2));
+  r->Images(Renderings(out_dir, prefix, FrameLabel(label + middle.timestamp_text + ".png")), 440);
+  if (c["with_fill"].contains("completeness")) {
+    r->Paragraph("Completeness: the share of the true surfaces the camera saw that have a surfel "
+                 "within 1 cm and within 2 cm (synthetic ground truth).");
+    std::vector<std::vector<std::string>> rows = CompletenessRows(c, "within_1cm");
+    const std::vector<std::vector<std::string>> cm2 = CompletenessRows(c, "within_2cm");
+    for (size_t i = 0; i < rows.size(); ++i) rows[i].insert(rows[i].end(), cm2[i].begin() + 1,
+                                                            cm2[i].end());
+    r->Table({"surface", "1 cm, with the fill", "1 cm, without", "2 cm, with the fill",
+              "2 cm, without"},
+             rows);
+    const json& a = c["with_fill"]["accuracy"];
+    if (a["fill_median_m"].is_number())
+      r->Paragraph("Accuracy of the fill's surfels: median distance to the true surface " +
+                   std::to_string(static_cast<int>(std::round(1000 * a["fill_median_m"].get<double>()))) +
+                   " mm, 90% within " +
+                   std::to_string(static_cast<int>(std::round(1000 * a["fill_p90_m"].get<double>()))) +
+                   " mm (" + std::to_string(a["fill_surfels"].get<long>()) + " surfels).");
+  }
+  std::vector<std::vector<std::string>> sizes;
+  for (const char* v : {"with_fill", "without_fill"}) {
+    const json& s = c[v]["surfels"];
+    sizes.push_back({v, std::to_string(s["count"].get<long>()),
+                     std::to_string(s["by_source"]["sensor"].get<long>()),
+                     std::to_string(s["by_source"]["stereo_fill"].get<long>())});
+  }
+  r->Table({"map", "surfels", "from the sensor", "from the stereo fill"}, sizes);
+  AddSurfelCountFigure(r, {{"with the fill", c["with_fill"]["surfels"]},
+                           {"without", c["without_fill"]["surfels"]}});
+  r->Heading("Trajectory");
+  AddTrajectoryFigure(r, estimate, c.contains("ate_m") ? truth : Trajectory());
+  r->Heading("Stereo fill");
+  AddFillOverlays(r, (dir / "with_fill").string(), prefix + "with_fill/");
+  r->Heading("Time per stage");
+  AddStageTimings(r, run);
+  r->Heading("Settings and files");
+  AddSettings(r, run);
+  r->Links({{prefix + "compare.json", "compare.json", "the figures above, as numbers"}});
+  for (const char* v : {"with_fill", "without_fill"}) {
+    r->Paragraph(std::string(v) + "/:");
+    AddFileLinks(r, (dir / v).string(), prefix + v + "/");
+  }
 }
 
 }  // namespace gf

@@ -21,6 +21,7 @@
 
 #include "acquisition/trajectory.h"
 #include "apps/reconstruct.h"
+#include "apps/report_html.h"
 
 namespace gf {
 
@@ -32,6 +33,12 @@ struct CompareSummary {
 
 // options.out_dir is DIR; options.pipeline.fill and fusion are forced on.
 CompareSummary RunCompare(const ReconstructOptions& options);
+
+// The comparison in DIR = out_dir (as RunCompare wrote it) as report sections: both maps rendered
+// from the same viewpoints, completeness and accuracy against ground truth, both maps' size over
+// time, the trajectory, fill overlays, timings, settings and links. `prefix` is DIR seen from the
+// report's folder ("" for DIR/report.html).
+void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std::string& prefix);
 
 // The ground-truth part of compare.json for one map (in the run's frame), or null when `input`
 // has no ground truth.

@@ -1,14 +1,16 @@
 // `glassfusion demo`: the built-in demonstration behind `make demo`.
 //
 // Generates the built-in glass scene (synthetic Kinect v1, `glass-table`, with ground truth) into
-// OUT/glass-table, reads it back through the same frame source a user's capture goes through, and
-// writes OUT/report.json and OUT/report.html: the sensor's holes per material (what the stereo
-// fill exists for), an overview image of the first frame, and the holes of every dataset folder
-// found under --data; then reconstructs the scene into OUT/run (tracking + stereo fill) and
-// reports the trajectory error and, per material, how many keyframe holes were filled and how
-// well (against the ground-truth depth of what the colour camera sees), with a fill overlay.
-// With a config file, the reconstruction uses its settings (and report.json lists them), so that
-// a setting's effect on each material can be measured on the demo scene.
+// OUT/glass-table, reads it back through the same frame source a user's capture goes through and
+// measures the sensor's holes per material (what the stereo fill exists for); then runs `compare`
+// on it into OUT/compare (tracked once, fused with and without the fill, both maps scored against
+// the ground truth) and scores the keyframes' fill per material against the true depth of what
+// the colour camera sees. Writes OUT/report.json and OUT/report.html: the scene, holes and fill
+// per material with a histogram of the fill's errors, then the comparison's sections (both maps
+// rendered, completeness per material with and without the fill, the surfel count over time, the
+// trajectory against ground truth, fill overlays, timings, settings, links), and the holes of every
+// dataset folder found under --data. With a config file, the runs use its settings (and the report
+// lists them), so that a setting's effect on each material can be measured on the demo scene.
 #pragma once
 
 #include <string>

@@ -8,6 +8,7 @@
 #include "acquisition/errors.h"
 #include "apps/interrupt.h"
 #include "apps/progress.h"
+#include "apps/run_report.h"
 #include "pipeline/run_sink.h"
 #include "surfels/mesh.h"
 #include "surfels/ply.h"
@@ -115,6 +116,12 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
         WriteMapMesh(ReadSurfelPly((fs::path(options.out_dir) / "map.ply").string()),
                      (fs::path(options.out_dir) / "mesh.ply").string(), {});
     spdlog::info("{}", m.BriefReport());
+  }
+  // The run is complete without its page: a report that cannot be made is a warning.
+  try {
+    WriteRunReport(options.out_dir, options.input);
+  } catch (const std::exception& e) {
+    spdlog::warn("{}/report.html not written: {}", options.out_dir, e.what());
   }
   return s;
 }

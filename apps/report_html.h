@@ -1,6 +1,6 @@
-// The pieces every HTML report is built from (compare, demo), so that they read the same: headings,
-// paragraphs, tables, images and SVG line plots, in one self-contained page (images are files
-// beside it, linked by relative path).
+// The pieces every HTML report is built from (reconstruct, compare, demo), so that they read the
+// same: headings, paragraphs, tables, images, SVG line plots and histograms, links and collapsed
+// blocks, in one self-contained page (images are files beside it, linked by relative path).
 //
 // Usage:
 //   gf::HtmlReport r("GlassFusion compare");
@@ -21,11 +21,23 @@ struct PlotSeries {
   std::string name;
   std::string color;                              // CSS colour
   std::vector<std::pair<double, double>> points;  // (x, y)
+  double stroke_width = 2;                        // pixels
 };
 
-// A line plot as inline SVG, axes from 0 to the largest value, with ticks and a legend.
+struct PlotStyle {
+  int width = 640, height = 300;  // pixels
+  bool from_zero = true;          // axes start at 0 (else at the data's smallest value)
+  bool equal_aspect = false;      // one unit is as long on both axes (a map, a trajectory)
+};
+
+// A line plot as inline SVG, with ticks, grid and a legend.
 std::string LinePlotSvg(const std::vector<PlotSeries>& series, const std::string& x_label,
-                        const std::string& y_label, int width = 640, int height = 300);
+                        const std::string& y_label, const PlotStyle& style = {});
+
+// A histogram as inline SVG: `values` counted in `bins` equal bins over [0, max_value] (larger
+// values in the last bin), bar height the share of all values.
+std::string HistogramSvg(const std::vector<double>& values, double max_value, int bins,
+                         const std::string& x_label, const std::string& color = "#2166ac");
 
 class HtmlReport {
  public:
@@ -38,6 +50,12 @@ class HtmlReport {
   void Images(const std::vector<std::pair<std::string, std::string>>& images, int width = 480);
   void Figure(const std::string& svg, const std::string& caption);
   void Preformatted(const std::string& text);
+  // A collapsed block: `summary` shown, `text` preformatted inside.
+  void Details(const std::string& summary, const std::string& text);
+  // A list of links (href relative to the report, text) with a description after each.
+  void Links(const std::vector<std::vector<std::string>>& href_text_description);
+  // The page. Once loaded, its <html> element carries data-images="L/N": L of its N images loaded
+  // (what tests read back through a headless browser).
   std::string Html() const;
 
  private:

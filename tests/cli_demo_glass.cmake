@@ -1,7 +1,8 @@
 # `glassfusion demo` end to end on the built-in glass scene (no datasets needed): the report is
-# written, the stereo fill reaches the glossy, dark and glass holes, and almost no filled
-# clear-glass pixel takes the glass's own depth instead of the background seen through it (the
-# goal is none).
+# written with the comparison of both maps, the stereo fill reaches the glossy, dark and glass
+# holes, almost no filled clear-glass pixel takes the glass's own depth instead of the background
+# seen through it (the goal is none), and headless Chromium renders report.html with every image
+# loaded, its plots and its tables.
 set(work "${CMAKE_CURRENT_BINARY_DIR}/cli_demo_glass_tmp")
 file(REMOVE_RECURSE "${work}")
 execute_process(COMMAND "${GLASSFUSION}" demo --out "${work}" --data "${work}/no-datasets"
@@ -9,10 +10,18 @@ execute_process(COMMAND "${GLASSFUSION}" demo --out "${work}" --data "${work}/no
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "demo failed (${rc}): ${err}")
 endif()
-if(NOT EXISTS "${work}/report.html" OR NOT EXISTS "${work}/fill_overlay.png")
-  message(FATAL_ERROR "demo wrote no report.html or fill_overlay.png")
-endif()
+foreach(f report.html overview.png compare/report.html compare/compare.json
+          compare/with_fill/map.ply compare/without_fill/map.ply compare/with_fill_camera.png)
+  if(NOT EXISTS "${work}/${f}")
+    message(FATAL_ERROR "demo wrote no ${f}")
+  endif()
+endforeach()
 file(READ "${work}/report.json" report)
+string(JSON with GET "${report}" compare with_fill completeness per_material glossy within_2cm)
+string(JSON without GET "${report}" compare without_fill completeness per_material glossy within_2cm)
+if(NOT with GREATER without)
+  message(FATAL_ERROR "the demo's glossy completeness: ${with} with the fill, ${without} without")
+endif()
 foreach(material glossy dark textured_glass clear_glass)
   string(JSON rate GET "${report}" fill_by_material ${material} fill_rate)
   string(JSON good GET "${report}" fill_by_material ${material} good_rate)
@@ -27,5 +36,57 @@ message("clear glass filled at the glass's depth: ${at_glass} of ${filled}")
 math(EXPR bound "${filled} / 1000")
 if(at_glass GREATER bound)
   message(FATAL_ERROR "clear glass filled at the glass's depth: ${at_glass} of ${filled} (want <= 0.1%)")
+endif()
+# The report as a person sees it: headless Chromium loads it; the page marks how many of its
+# images loaded (data-images="L/N").
+find_program(CHROMIUM NAMES chromium chromium-browser google-chrome)
+if(NOT CHROMIUM)
+  message("chromium not installed (`make deps` installs it): report.html not rendered")
+else()
+  execute_process(COMMAND "${CHROMIUM}" --headless --no-sandbox --disable-gpu --no-first-run
+                          "--user-data-dir=${work}/chromium-profile" --virtual-time-budget=10000
+                          --dump-dom "file://${work}/report.html"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE dom ERROR_QUIET TIMEOUT 120)
+  if(NOT rc EQUAL 0 OR NOT dom MATCHES "data-images=\"([0-9]+)/([0-9]+)\"")
+    message(FATAL_ERROR "chromium (${rc}) did not render report.html")
+  endif()
+  set(loaded ${CMAKE_MATCH_1})
+  set(images ${CMAKE_MATCH_2})
+  string(REGEX MATCHALL "<svg" plots "${dom}")
+  string(REGEX MATCHALL "<table" tables "${dom}")
+  list(LENGTH plots n_plots)
+  list(LENGTH tables n_tables)
+  message("chromium: ${loaded} of ${images} images loaded, ${n_plots} plots, ${n_tables} tables")
+  # Overview, 4 renderings of the two maps, 3 fill overlays; histogram, surfel count, trajectory.
+  if(NOT loaded EQUAL images OR images LESS 8 OR n_plots LESS 3 OR n_tables LESS 5)
+    message(FATAL_ERROR "report.html in chromium: ${loaded}/${images} images, ${n_plots} plots, "
+                        "${n_tables} tables (want all of >= 8 images, >= 3 plots, >= 5 tables)")
+  endif()
+endif()
+# The report as a person sees it: headless Chromium loads it; the page marks how many of its
+# images loaded (data-images="L/N").
+find_program(CHROMIUM NAMES chromium chromium-browser google-chrome)
+if(NOT CHROMIUM)
+  message("chromium not installed (`make deps` installs it): report.html not rendered")
+else()
+  execute_process(COMMAND "${CHROMIUM}" --headless --no-sandbox --disable-gpu --no-first-run
+                          "--user-data-dir=${work}/chromium-profile" --virtual-time-budget=10000
+                          --dump-dom "file://${work}/report.html"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE dom ERROR_QUIET TIMEOUT 120)
+  if(NOT rc EQUAL 0 OR NOT dom MATCHES "data-images=\"([0-9]+)/([0-9]+)\"")
+    message(FATAL_ERROR "chromium (${rc}) did not render report.html")
+  endif()
+  set(loaded ${CMAKE_MATCH_1})
+  set(images ${CMAKE_MATCH_2})
+  string(REGEX MATCHALL "<svg" plots "${dom}")
+  string(REGEX MATCHALL "<table" tables "${dom}")
+  list(LENGTH plots n_plots)
+  list(LENGTH tables n_tables)
+  message("chromium: ${loaded} of ${images} images loaded, ${n_plots} plots, ${n_tables} tables")
+  # Overview, 4 renderings of the two maps, 3 fill overlays; histogram, surfel count, trajectory.
+  if(NOT loaded EQUAL images OR images LESS 8 OR n_plots LESS 3 OR n_tables LESS 5)
+    message(FATAL_ERROR "report.html in chromium: ${loaded}/${images} images, ${n_plots} plots, "
+                        "${n_tables} tables (want all of >= 8 images, >= 3 plots, >= 5 tables)")
+  endif()
 endif()
 file(REMOVE_RECURSE "${work}")

@@ -1,0 +1,257 @@
+#include "apps/run_report.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+#include "acquisition/file_util.h"
+#include "acquisition/trajectory_metrics.h"
+
+namespace fs = std::filesystem;
+
+namespace gf {
+namespace {
+
+using json = nlohmann::ordered_json;
+
+std::string& StoredCommandLine() {
+  static std::string line;
+  return line;
+}
+
+// report.json's number at `key`, or `otherwise` where it is missing or null (a stage that did not
+// run, a run without fill).
+double NumberAt(const json& object, const char* key, double otherwise = 0) {
+  return object.is_object() && object.contains(key) && object[key].is_number()
+             ? object[key].get<double>()
+             : otherwise;
+}
+
+std::string Count(const json& object, const char* key) {
+  return std::to_string(static_cast<long>(NumberAt(object, key)));
+}
+
+std::string Format(const char* format, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, value);
+  return buffer;
+}
+
+// The keyframes of a run as undistorted/ names them (<index>_<ts>.png), in frame order.
+std::vector<std::string> KeyframeFiles(const std::string& run_dir) {
+  std::vector<std::string> names;
+  const fs::path dir = fs::path(run_dir) / "undistorted" / "color";
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return names;
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// Two orthonormal directions along which `points` spread most (the plane seen "from above").
+std::pair<Eigen::Vector3d, Eigen::Vector3d> MainDirections(
+    const std::vector<Eigen::Vector3d>& points) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : points) mean += p / points.size();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const auto& p : points) covariance += (p - mean) * (p - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  return {solver.eigenvectors().col(2), solver.eigenvectors().col(1)};  // largest first
+}
+
+}  // namespace
+
+void SetCommandLine(int argc, char** argv) {
+  std::string line;
+  for (int i = 0; i < argc; ++i) {
+    std::string arg = argv[i];
+    const bool plain =
+        !arg.empty() && arg.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                              "0123456789-_./:=,+@%") == std::string::npos;
+    if (!plain) {
+      std::string quoted = "'";
+      for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      arg = quoted + "'";
+    }
+    line += (i ? " " : "") + arg;
+  }
+  StoredCommandLine() = line;
+}
+
+const std::string& CommandLine() { return StoredCommandLine(); }
+
+std::string FrameLabel(const std::string& file) {
+  const size_t underscore = file.find('_');
+  const size_t dot = file.rfind(".png");
+  if (underscore == std::string::npos || dot == std::string::npos || dot < underscore) return file;
+  const std::string index = file.substr(0, underscore);
+  const size_t nonzero = index.find_first_not_of('0');
+  return "frame " + (nonzero == std::string::npos ? "0" : index.substr(nonzero)) + " (t = " +
+         file.substr(underscore + 1, dot - underscore - 1) + " s)";
+}
+
+std::string RunSummaryText(const json& report, const double* ate_m) {
+  std::string text = Count(report, "frames") + " frames in " +
+                     Format("%.1f", NumberAt(report, "seconds")) + " s (" +
+                     Format("%.1f", NumberAt(report, "fps")) + " fps over the whole run), " +
+                     Count(report, "keyframes") + " keyframes";
+  if (report.contains("tracking"))
+    text += ", " + Count(report["tracking"], "lost_frames") + " frames lost";
+  if (report.contains("loops") && report["loops"].is_object() &&
+      report["loops"].value("enabled", false))
+    text += "; " + Count(report["loops"], "accepted") + " loops accepted";
+  if (report.contains("fill") && report["fill"].is_object())
+    text += "; " + Format("%.1f", 100 * NumberAt(report["fill"], "fill_rate")) +
+            "% of the keyframes' hole pixels filled";
+  if (report.contains("surfels") && report["surfels"].is_object())
+    text += "; " + Count(report["surfels"], "count") + " surfels (" +
+            Count(report["surfels"]["by_source"], "stereo_fill") + " from the fill)";
+  if (ate_m) text += "; trajectory error (ATE) " + Format("%.2f", 100 * *ate_m) + " cm";
+  return text + ".";
+}
+
+void AddTrajectoryFigure(HtmlReport* r, const Trajectory& estimate, const Trajectory& truth) {
+  if (estimate.size() < 2) return;
+  SE3 truth_from_estimate;
+  const bool aligned = truth.size() >= 3 && EvaluateTrajectory(truth, estimate).success;
+  if (aligned) truth_from_estimate = EvaluateTrajectory(truth, estimate).gt_from_estimate;
+  std::vector<Eigen::Vector3d> est, gt;
+  for (const StampedPose& p : estimate)
+    est.push_back(truth_from_estimate * p.world_from_camera.translation());
+  if (aligned)  // the ground truth over the run's time only (a run of part of a capture)
+    for (const auto& [g, e] : AssociatePoses(truth, estimate, 0.02))
+      gt.push_back(truth[g].world_from_camera.translation());
+  const auto [a, b] = MainDirections(aligned ? gt : est);
+  std::vector<PlotSeries> series;
+  if (aligned) series.push_back({"ground truth", "#bbbbbb", {}, 6});  // wide: visible beneath
+  series.push_back({"GlassFusion", "#b2182b", {}, 1.5});
+  for (const auto& p : gt) series.front().points.push_back({p.dot(a), p.dot(b)});
+  for (const auto& p : est) series.back().points.push_back({p.dot(a), p.dot(b)});
+  PlotStyle style;
+  style.from_zero = false;
+  style.equal_aspect = true;
+  style.height = 360;
+  r->Figure(LinePlotSvg(series, "m, along the main direction of motion", "m, across it", style),
+            aligned ? "The camera's path from above (the plane of its two main directions of "
+                      "motion), the run's estimate moved onto the ground truth by the best rigid "
+                      "alignment, as ATE is measured."
+                    : "The camera's path from above (the plane of its two main directions of "
+                      "motion); the input has no ground truth.");
+}
+
+void AddSurfelCountFigure(HtmlReport* r, const std::vector<std::pair<std::string, json>>& runs) {
+  static const char* colors[] = {"#1b7837", "#762a83", "#2166ac", "#b2182b"};
+  std::vector<PlotSeries> series;
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const json& surfels = runs[i].second;
+    if (!surfels.is_object() || !surfels.contains("count_over_time")) continue;
+    PlotSeries s{runs[i].first, colors[i % 4], {}};
+    for (const json& c : surfels["count_over_time"])
+      s.points.push_back({c["frame"].get<double>(), c["stable"].get<double>()});
+    series.push_back(s);
+  }
+  if (series.empty()) return;
+  r->Figure(LinePlotSvg(series, "frame", "stable surfels"),
+            "The model's size as the capture goes on (stable surfels: seen often enough to keep).");
+}
+
+void AddFillOverlays(HtmlReport* r, const std::string& run_dir, const std::string& prefix,
+                     int count) {
+  const std::vector<std::string> files = KeyframeFiles(run_dir);
+  std::vector<size_t> picks;  // spread evenly, first and last included
+  for (int k = 0; k < count && !files.empty(); ++k) {
+    const size_t i = count == 1 ? files.size() / 2 : k * (files.size() - 1) / (count - 1);
+    if (picks.empty() || picks.back() != i) picks.push_back(i);
+  }
+  std::vector<std::pair<std::string, std::string>> images;
+  for (size_t i : picks) {
+    const std::string& file = files[i];
+    const size_t underscore = file.find('_');
+    if (underscore == std::string::npos) continue;  // no timestamp: keyframes/ names it by index
+    const std::string ts = file.substr(underscore + 1, file.rfind(".png") - underscore - 1);
+    const std::string overlay = "keyframes/" + ts + ".fill_overlay.png";
+    if (IsRegularFile((fs::path(run_dir) / overlay).string()))
+      images.push_back({prefix + overlay, FrameLabel(file)});
+  }
+  if (images.empty()) return;
+  r->Paragraph("Keyframes' fill: filled pixels green (cyan: carried from earlier keyframes; "
+               "brighter = more confident), holes left empty magenta.");
+  r->Images(images, 320);
+}
+
+void AddStageTimings(HtmlReport* r, const json& report) {
+  if (!report.contains("stages")) return;
+  static const std::vector<std::pair<std::string, std::string>> meaning = {
+      {"read", "reading and decoding a frame"},
+      {"track", "tracking a frame"},
+      {"stereo", "stereo fill of a keyframe (one core)"},
+      {"fusion", "fusing a frame into the map"},
+      {"fusion_fill", "fusing a keyframe's fill"},
+      {"loop_closure", "loop search and pose graph, per keyframe"}};
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& [name, what] : meaning) {
+    if (!report["stages"].contains(name)) continue;
+    const json& t = report["stages"][name];
+    if (NumberAt(t, "count") == 0) continue;
+    rows.push_back({name, what, Count(t, "count"), Format("%.1f", NumberAt(t, "median_ms")),
+                    Format("%.1f", NumberAt(t, "max_ms"))});
+  }
+  r->Table({"stage", "what", "count", "median ms", "max ms"}, rows);
+  r->Paragraph("Each stage runs in its own thread; on " +
+               Count(report.value("config", json::object()), "hardware_concurrency") +
+               " cores they overlap, so the whole run's rate is not the sum.");
+}
+
+void AddSettings(HtmlReport* r, const json& report) {
+  if (!CommandLine().empty()) r->Details("the command that made this report", CommandLine());
+  if (report.contains("config"))
+    r->Details("every setting (report.json \"config\"; --config reads its \"settings\")",
+               report["config"].dump(2));
+}
+
+void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& prefix) {
+  static const std::vector<std::pair<std::string, std::string>> files = {
+      {"map.ply", "the surfel map (binary PLY: x y z nx ny nz red green blue radius confidence "
+                  "source)"},
+      {"mesh.ply", "a triangle mesh of the map (--mesh)"},
+      {"trajectory.txt", "every frame's world_from_camera (TUM format)"},
+      {"report.json", "everything on this page, as numbers"},
+      {"camera.json", "the camera of keyframes/ (the input's, with its lens distortion)"},
+      {"keyframes/", "per keyframe: hole mask, filled depth (mm), fill overlay, colour"},
+      {"undistorted/", "the keyframes on the pinhole camera: color/, depth/ (mm)"},
+      {"undistorted/camera_intrinsic.json", "their camera, as Open3D reads it"},
+      {"undistorted/trajectory.log", "their poses, as Open3D reads them (Redwood .log)"}};
+  std::vector<std::vector<std::string>> links;
+  for (const auto& [name, what] : files)
+    if (fs::exists(fs::path(run_dir) / name)) links.push_back({prefix + name, name, what});
+  r->Links(links);
+}
+
+void WriteRunReport(const std::string& run_dir, const std::string& input) {
+  const json report = json::parse(ReadTextFile((fs::path(run_dir) / "report.json").string()));
+  const Trajectory estimate = ReadTumTrajectory((fs::path(run_dir) / "trajectory.txt").string());
+  Trajectory truth;
+  const fs::path truth_file = fs::path(input) / "groundtruth.txt";
+  if (IsRegularFile(truth_file.string())) truth = ReadTrajectory(truth_file.string());
+  const TrajectoryErrorSummary ate = EvaluateTrajectory(truth, estimate);
+  HtmlReport r("GlassFusion run: " + fs::path(input).filename().string());
+  r.Paragraph("Input: " + input + ". " + RunSummaryText(report, ate.success ? &ate.ate_rmse_m : nullptr));
+  r.Heading("Trajectory");
+  AddTrajectoryFigure(&r, estimate, ate.success ? truth : Trajectory());
+  if (report.contains("surfels") && report["surfels"].is_object()) {
+    r.Heading("The model");
+    AddSurfelCountFigure(&r, {{"surfels", report["surfels"]}});
+  }
+  r.Heading("Stereo fill");
+  AddFillOverlays(&r, run_dir, "");
+  r.Heading("Time per stage");
+  AddStageTimings(&r, report);
+  r.Heading("Settings and files");
+  AddSettings(&r, report);
+  AddFileLinks(&r, run_dir, "");
+  WriteTextFileAtomically((fs::path(run_dir) / "report.html").string(), r.Html());
+}
+
+}  // namespace gf
