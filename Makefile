@@ -72,7 +72,9 @@ tsan: deps
 	  ctest --output-on-failure -j $(JOBS) -R '^pipeline/' --repeat after-timeout:2 \
 	  -E 'AFillFailureIsContained|CostsNothingWithoutDrift'
 
-demo: build
+# Builds the command alone (not the tests and benchmarks), then runs the demo.
+demo: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target glassfusion
 	$(BUILD_DIR)/apps/glassfusion demo --out $(DEMO_OUT)
 
 format:
