@@ -7,14 +7,15 @@ JOBS      ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
 # Every Debian (bookworm) package the build, the tests and the measuring scripts need (chromium:
-# the test that renders the demo report in a headless browser).
+# the test that renders the demo report in a headless browser; slurm-wlm and munge: the test that
+# runs `batch --slurm` on a one-node cluster on loopback).
 DEB_PACKAGES := cmake make g++ pkg-config \
   libopencv-dev libeigen3-dev libceres-dev libpcl-dev \
   libopenni2-dev libfreenect-dev \
   libcli11-dev nlohmann-json3-dev libspdlog-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
   python3-numpy python3-opencv python3-open3d \
-  colmap chromium
+  colmap chromium slurm-wlm munge
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 

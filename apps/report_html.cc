@@ -157,12 +157,25 @@ void HtmlReport::Paragraph(const std::string& text) {
 
 void HtmlReport::Table(const std::vector<std::string>& header,
                        const std::vector<std::vector<std::string>>& rows) {
+  LinkedTable(header, rows, {});
+}
+
+void HtmlReport::LinkedTable(const std::vector<std::string>& header,
+                             const std::vector<std::vector<std::string>>& rows,
+                             const std::vector<std::vector<std::string>>& hrefs) {
   body_ += "<table><tr>";
   for (const std::string& h : header) body_ += "<th>" + HtmlEscape(h) + "</th>";
   body_ += "</tr>\n";
-  for (const auto& row : rows) {
+  for (size_t i = 0; i < rows.size(); ++i) {
     body_ += "<tr>";
-    for (const std::string& cell : row) body_ += "<td>" + HtmlEscape(cell) + "</td>";
+    for (size_t j = 0; j < rows[i].size(); ++j) {
+      const std::string href = i < hrefs.size() && j < hrefs[i].size() ? hrefs[i][j] : "";
+      body_ += "<td>" +
+               (href.empty() ? HtmlEscape(rows[i][j])
+                             : "<a href=\"" + HtmlEscape(href) + "\">" + HtmlEscape(rows[i][j]) +
+                                   "</a>") +
+               "</td>";
+    }
     body_ += "</tr>\n";
   }
   body_ += "</table>\n";

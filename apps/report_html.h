@@ -46,6 +46,10 @@ class HtmlReport {
   void Paragraph(const std::string& text);
   void Table(const std::vector<std::string>& header,
              const std::vector<std::vector<std::string>>& rows);
+  // The same with links: hrefs[i][j] (relative to the report; empty = none) on cell rows[i][j].
+  void LinkedTable(const std::vector<std::string>& header,
+                   const std::vector<std::vector<std::string>>& rows,
+                   const std::vector<std::vector<std::string>>& hrefs);
   // Images side by side, each with its caption (paths relative to the report).
   void Images(const std::vector<std::pair<std::string, std::string>>& images, int width = 480);
   void Figure(const std::string& svg, const std::string& caption);

@@ -1,0 +1,88 @@
+// `glassfusion batch MANIFEST --out DIR`: reprocess many captures, each as `compare` does (tracked
+// once, fused with and without the fill), and summarise what each gained.
+//
+// MANIFEST is a text file with one capture per line, `PATH [--config FILE]` (relative paths from
+// the manifest's folder; blank lines and lines starting with '#' are skipped), or a folder whose
+// sub-folders are the captures. Capture i runs in DIR/<name>/ (its folder's name, made unique) as
+// a child process `glassfusion compare PATH --out DIR/<name> --force [--config FILE]`, so that one
+// capture's crash cannot take the others down; its log goes to DIR/batch/<name>.log and its state
+// to DIR/batch/<name>.json ({"status": "done" | "failed", "attempts", "seconds", "fingerprint",
+// "error"}). A failed capture is retried once, then reported; the others go on.
+//
+// Resume: a capture whose DIR/<name>/compare.json exists, whose run says "complete": true and
+// whose state's fingerprint (glassfusion's version, the input's path, the settings file's
+// contents) matches is skipped.
+//
+// Slurm (--slurm): writes DIR/batch.sbatch, a job array with one capture per task (each task runs
+// `glassfusion batch MANIFEST --out DIR --task $SLURM_ARRAY_TASK_ID`), and submits it with sbatch
+// when --submit is given; `glassfusion batch --collect DIR` then builds the summary from whatever
+// tasks have finished. Every node must see MANIFEST's captures, DIR and the glassfusion executable
+// at the same paths (a shared filesystem).
+//
+// Summary: DIR/summary.csv and DIR/summary.html (report writer of apps/report_html.h): per capture
+// its status, frames, time, ATE where ground truth exists, surfels with and without the fill,
+// completeness gain where ground truth exists, fill rate, a link to its report; totals first.
+#pragma once
+
+#include <atomic>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace gf {
+
+struct BatchCapture {
+  std::string name;         // its folder under DIR
+  std::string input;        // absolute path
+  std::string config_file;  // absolute path, or empty
+};
+
+struct BatchOptions {
+  std::string manifest;     // a manifest file or a folder of captures
+  std::string out_dir;      // DIR
+  std::string config_file;  // settings for captures whose manifest line names none
+  int jobs = 1;             // captures processed at once on this machine
+  int retries = 1;          // further attempts after a failed one
+  int task = -1;            // >= 0: process capture `task` only (a Slurm array task)
+  bool slurm = false;       // write DIR/batch.sbatch instead of processing
+  bool submit = false;      // with slurm: submit it with sbatch
+  int slurm_max_running = 0;    // the array's %K: tasks running at once (0 = no limit)
+  int slurm_cpus_per_task = 2;  // cores per task (the stages use 2)
+  std::string slurm_memory = "4G";       // memory per task (--mem)
+  std::string slurm_time = "02:00:00";   // time limit per task (--time)
+  const std::atomic<int>* interrupt = nullptr;  // Ctrl-C: stop launching, finish, summarise
+  bool Check(std::string* message = nullptr) const;
+};
+
+// The captures MANIFEST lists, in order; `default_config` for those without their own. Throws
+// InputError naming the manifest line that is wrong.
+std::vector<BatchCapture> ReadManifest(const std::string& manifest,
+                                       const std::string& default_config);
+
+// What decides whether an earlier run can be kept: the version, the input, the settings' text.
+std::string SettingsFingerprint(const BatchCapture& capture);
+
+struct BatchSummary {
+  int captures = 0, done = 0, skipped = 0, failed = 0, pending = 0;
+  std::string BriefReport() const;
+};
+
+// Processes the captures (all, or options.task), then writes the summary. Throws Interrupted
+// when stopped by a signal (after the summary of what finished).
+BatchSummary RunBatch(const BatchOptions& options);
+
+// DIR/batch.sbatch for the manifest's captures; submits it when options.submit. Returns its path.
+std::string WriteSlurmScript(const BatchOptions& options);
+
+// DIR/summary.csv and DIR/summary.html from the state of every capture of DIR/batch/manifest.json.
+BatchSummary CollectBatch(const std::string& out_dir);
+
+// `sbatch --parsable SCRIPT`: returns the job id. Throws InputError when sbatch fails or is absent.
+std::string SubmitSlurmScript(const std::string& script);
+
+// Shared by the two halves: DIR/batch/manifest.json (the captures, in order), and a JSON file read
+// back (null when absent or unreadable, e.g. half-written by a task killed mid-write elsewhere).
+void WriteBatchManifest(const std::string& out_dir, const std::vector<BatchCapture>& captures);
+nlohmann::ordered_json ReadJsonIfAny(const std::string& path);
+
+}  // namespace gf
