@@ -63,30 +63,4 @@ else()
                         "${n_tables} tables (want all of >= 8 images, >= 3 plots, >= 5 tables)")
   endif()
 endif()
-# The report as a person sees it: headless Chromium loads it; the page marks how many of its
-# images loaded (data-images="L/N").
-find_program(CHROMIUM NAMES chromium chromium-browser google-chrome)
-if(NOT CHROMIUM)
-  message("chromium not installed (`make deps` installs it): report.html not rendered")
-else()
-  execute_process(COMMAND "${CHROMIUM}" --headless --no-sandbox --disable-gpu --no-first-run
-                          "--user-data-dir=${work}/chromium-profile" --virtual-time-budget=10000
-                          --dump-dom "file://${work}/report.html"
-                  RESULT_VARIABLE rc OUTPUT_VARIABLE dom ERROR_QUIET TIMEOUT 120)
-  if(NOT rc EQUAL 0 OR NOT dom MATCHES "data-images=\"([0-9]+)/([0-9]+)\"")
-    message(FATAL_ERROR "chromium (${rc}) did not render report.html")
-  endif()
-  set(loaded ${CMAKE_MATCH_1})
-  set(images ${CMAKE_MATCH_2})
-  string(REGEX MATCHALL "<svg" plots "${dom}")
-  string(REGEX MATCHALL "<table" tables "${dom}")
-  list(LENGTH plots n_plots)
-  list(LENGTH tables n_tables)
-  message("chromium: ${loaded} of ${images} images loaded, ${n_plots} plots, ${n_tables} tables")
-  # Overview, 4 renderings of the two maps, 3 fill overlays; histogram, surfel count, trajectory.
-  if(NOT loaded EQUAL images OR images LESS 8 OR n_plots LESS 3 OR n_tables LESS 5)
-    message(FATAL_ERROR "report.html in chromium: ${loaded}/${images} images, ${n_plots} plots, "
-                        "${n_tables} tables (want all of >= 8 images, >= 3 plots, >= 5 tables)")
-  endif()
-endif()
 file(REMOVE_RECURSE "${work}")
