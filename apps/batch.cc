@@ -244,7 +244,7 @@ std::string SettingsFingerprint(const BatchCapture& c) {
 
 BatchSummary RunBatch(const BatchOptions& options) {
   std::string problem;
-  if (!options.Check(&problem)) throw InputError(options.out_dir, problem);
+  if (!options.Check(&problem)) throw InputError("batch", problem);
   const std::vector<BatchCapture> captures = ReadManifest(options.manifest, options.config_file);
   if (options.task >= static_cast<int>(captures.size()))
     throw InputError(options.manifest, "--task " + std::to_string(options.task) + ": it lists " +

@@ -141,7 +141,7 @@ BatchSummary CollectBatch(const std::string& out_dir) {
 
 std::string WriteSlurmScript(const BatchOptions& options) {
   std::string problem;
-  if (!options.Check(&problem)) throw InputError(options.out_dir, problem);
+  if (!options.Check(&problem)) throw InputError("batch", problem);
   const std::vector<BatchCapture> captures = ReadManifest(options.manifest, options.config_file);
   const std::string dir = fs::absolute(options.out_dir).string();
   std::error_code ec;

@@ -458,8 +458,9 @@ void AddBatchCommand(CLI::App& app) {
                   "build DIR's summary from whatever captures have finished (Slurm)");
   cmd->callback([options, collect] {
     if (!collect->empty()) {
-      std::cout << "batch: " << CollectBatch(*collect).BriefReport() << "; " << *collect
-                << "/summary.html" << std::endl;
+      const BatchSummary s = CollectBatch(*collect);
+      std::cout << "batch: " << s.BriefReport() << "; " << *collect << "/summary.html"
+                << std::endl;
       return;
     }
     if (options->slurm) {
