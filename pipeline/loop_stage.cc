@@ -138,8 +138,17 @@ void LoopClosureStage::Process(const LoopKeyframeItem& item) {
     detection = detector_.Detect(*key, estimate, database_,
                                  [&](int id) { return graph_.pose(id); });
   }
-  for (const PoseGraphEdge& e : detection.accepted) graph_.AddEdge(e);
-  {
+  bool stored_place = false;
+  for (const PoseGraphEdge& e : detection.accepted) {
+    graph_.AddEdge(e);
+    const double angle_deg =
+        Eigen::AngleAxisd(e.from_from_to.RotationMatrix()).angle() / kRadPerDeg;
+    stored_place |= e.from_from_to.translation().norm() <= options_.same_place.max_translation_m &&
+                    angle_deg <= options_.same_place.max_rotation_deg;
+  }
+  if (stored_place) {
+    ++same_place_;
+  } else {
     std::unique_lock<std::shared_mutex> lock(database_mutex_);
     database_.Add(key);
   }
@@ -230,6 +239,8 @@ json LoopClosureStage::Report() const {
   return {{"enabled", true},
           {"keyframes", keyframes_done_.load()},
           {"keyframes_dropped", dropped_.load()},
+          {"keyframes_stored", static_cast<int>(database_.keyframes().size())},
+          {"keyframes_same_place", same_place_},
           {"keyframes_failed", failed_},
           {"candidates", candidates_},
           {"verified", verified_},

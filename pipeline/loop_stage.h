@@ -47,6 +47,12 @@ struct LoopStageOptions {
   double gap_sigma_deg = 30.0;
   int relocalise_candidates = 3;  // best appearance matches verified per lost frame
   bool drop_when_busy = true;     // live input; recorded input waits (set by the pipeline)
+  // A place already stored (set by the pipeline from the tracker's keyframe policy; not a setting
+  // of its own): a keyframe that a verified loop puts within this rotation and translation of a
+  // stored keyframe is one the tracker would not have made there. It stays in the pose graph, but
+  // its features and depth are not kept, so the database grows with the places a capture visits,
+  // not with its length.
+  KeyframePolicy same_place;
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -115,6 +121,7 @@ class LoopClosureStage : public Relocaliser {
   nlohmann::ordered_json accepted_ = nlohmann::ordered_json::array();
   std::map<std::string, int> refused_;  // reasons, without their figures
   int candidates_ = 0, verified_ = 0, pending_ = 0, optimisations_ = 0, failed_ = 0;
+  int same_place_ = 0;  // keyframes not stored: their place was (same_place)
   std::vector<double> keyframe_ms_, optimise_ms_;
   std::atomic<int> keyframes_done_{0};
   std::atomic<int> dropped_{0};

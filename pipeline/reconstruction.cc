@@ -176,6 +176,7 @@ std::unique_ptr<Reconstruction::Stages> Reconstruction::MakeStages(FrameSource& 
   if (options_.loop_closure) {
     LoopStageOptions loop_options = options_.loop_options;
     loop_options.drop_when_busy = live;
+    loop_options.same_place = options_.tracker.keyframes;
     // On the images tracking works on: undistorted (FrameToKeyframeTracker).
     Camera pinhole = source.camera();
     pinhole.distortion = {0, 0, 0, 0, 0};
