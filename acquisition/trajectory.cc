@@ -133,4 +133,10 @@ Trajectory ReadTrajectory(const std::string& path) {
   return is_log ? ReadRedwoodLog(path) : ReadTumTrajectory(path);
 }
 
+std::string GroundTruthBeside(const std::string& input) {
+  for (const char* name : {"/groundtruth.txt", "/groundtruth.log"})
+    if (IsRegularFile(input + name)) return input + name;
+  return "";
+}
+
 }  // namespace gf

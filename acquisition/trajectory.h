@@ -34,4 +34,8 @@ void WriteRedwoodLog(const std::string& path, const Trajectory& trajectory);
 // Either format, chosen by the extension (.log = Redwood, anything else = TUM).
 Trajectory ReadTrajectory(const std::string& path);
 
+// The ground truth beside an input folder: INPUT/groundtruth.txt (TUM) or INPUT/groundtruth.log
+// (Redwood); "" when it has none.
+std::string GroundTruthBeside(const std::string& input);
+
 }  // namespace gf

@@ -9,9 +9,9 @@
 #include <cerrno>
 #include <chrono>
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <cstring>
 #include <functional>
 #include <map>
 #include <sstream>
@@ -46,14 +46,6 @@ std::string UniqueName(const std::string& input, std::map<std::string, int>* use
   return n == 1 ? name : name + "_" + std::to_string(n);
 }
 
-// This executable (children and Slurm tasks run the same build).
-std::string SelfPath() {
-  std::error_code ec;
-  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) throw InputError("/proc/self/exe", "cannot find this executable: " + ec.message());
-  return self.string();
-}
-
 // Whether DIR/<name> holds a complete comparison made with the same settings.
 bool AlreadyDone(const std::string& out_dir, const BatchCapture& c) {
   const fs::path run = fs::path(out_dir) / c.name;
@@ -68,8 +60,8 @@ bool AlreadyDone(const std::string& out_dir, const BatchCapture& c) {
 // Starts `glassfusion compare` for a capture, its output appended to `log`. Returns the pid.
 pid_t Launch(const std::string& self, const BatchCapture& c, const std::string& out_dir,
              const std::string& log) {
-  std::vector<std::string> args = {self,    "compare", c.input, "--out",
-                                   (fs::path(out_dir) / c.name).string(), "--force"};
+  std::vector<std::string> args = {
+      self, "compare", c.input, "--out", (fs::path(out_dir) / c.name).string(), "--force"};
   if (!c.config_file.empty()) args.insert(args.end(), {"--config", c.config_file});
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
@@ -105,7 +97,7 @@ struct Running {
 // seconds)` for each. A failed attempt is retried up to `retries` more times.
 void RunChildren(const BatchOptions& options, const std::vector<BatchCapture>& todo,
                  const std::function<void(const Running&, bool, double)>& finished) {
-  const std::string self = SelfPath();
+  const std::string self = ExecutablePath();
   std::vector<Running> running;
   std::vector<Running> queue;
   for (const BatchCapture& c : todo) queue.push_back({c, 0, 1, {}});
@@ -191,7 +183,8 @@ std::vector<BatchCapture> ReadManifest(const std::string& manifest,
       if (e.is_directory() && e.path().filename() != "batch")
         inputs.push_back(Absolute(e.path(), "."));
     std::sort(inputs.begin(), inputs.end());
-    for (const std::string& input : inputs) captures.push_back({UniqueName(input, &used), input, config});
+    for (const std::string& input : inputs)
+      captures.push_back({UniqueName(input, &used), input, config});
   } else {
     if (!IsRegularFile(manifest)) throw InputError(manifest, "no such manifest file or folder");
     const fs::path base = fs::absolute(manifest).parent_path();
@@ -222,6 +215,13 @@ void WriteBatchManifest(const std::string& out_dir, const std::vector<BatchCaptu
     list.push_back({{"name", c.name}, {"input", c.input}, {"config", c.config_file}});
   WriteTextFileAtomically((StateDir(out_dir) / "manifest.json").string(),
                           json({{"captures", list}}).dump(2) + "\n");
+}
+
+std::string ExecutablePath() {
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw InputError("/proc/self/exe", "cannot find this executable: " + ec.message());
+  return self.string();
 }
 
 json ReadJsonIfAny(const std::string& path) {
@@ -277,9 +277,9 @@ BatchSummary RunBatch(const BatchOptions& options) {
   BatchSummary s = CollectBatch(options.out_dir);
   s.skipped = skipped;
   if (options.interrupt && *options.interrupt)
-    throw Interrupted(*options.interrupt, options.out_dir + ": batch stopped by " +
-                                              SignalName(*options.interrupt) + " after " +
-                                              std::to_string(finished) + " captures; summary written");
+    throw Interrupted(*options.interrupt,
+                      options.out_dir + ": batch stopped by " + SignalName(*options.interrupt) +
+                          " after " + std::to_string(finished) + " captures; summary written");
   return s;
 }
 

@@ -38,18 +38,18 @@ struct BatchCapture {
 };
 
 struct BatchOptions {
-  std::string manifest;     // a manifest file or a folder of captures
-  std::string out_dir;      // DIR
-  std::string config_file;  // settings for captures whose manifest line names none
-  int jobs = 1;             // captures processed at once on this machine
-  int retries = 1;          // further attempts after a failed one
-  int task = -1;            // >= 0: process capture `task` only (a Slurm array task)
-  bool slurm = false;       // write DIR/batch.sbatch instead of processing
-  bool submit = false;      // with slurm: submit it with sbatch
-  int slurm_max_running = 0;    // the array's %K: tasks running at once (0 = no limit)
-  int slurm_cpus_per_task = 2;  // cores per task (the stages use 2)
-  std::string slurm_memory = "4G";       // memory per task (--mem)
-  std::string slurm_time = "02:00:00";   // time limit per task (--time)
+  std::string manifest;                 // a manifest file or a folder of captures
+  std::string out_dir;                  // DIR
+  std::string config_file;              // settings for captures whose manifest line names none
+  int jobs = 1;                         // captures processed at once on this machine
+  int retries = 1;                      // further attempts after a failed one
+  int task = -1;                        // >= 0: process capture `task` only (a Slurm array task)
+  bool slurm = false;                   // write DIR/batch.sbatch instead of processing
+  bool submit = false;                  // with slurm: submit it with sbatch
+  int slurm_max_running = 0;            // the array's %K: tasks running at once (0 = no limit)
+  int slurm_cpus_per_task = 2;          // cores per task (the stages use 2)
+  std::string slurm_memory = "4G";      // memory per task (--mem)
+  std::string slurm_time = "02:00:00";  // time limit per task (--time)
   const std::atomic<int>* interrupt = nullptr;  // Ctrl-C: stop launching, finish, summarise
   bool Check(std::string* message = nullptr) const;
 };
@@ -83,6 +83,8 @@ std::string SubmitSlurmScript(const std::string& script);
 // Shared by the two halves: DIR/batch/manifest.json (the captures, in order), and a JSON file read
 // back (null when absent or unreadable, e.g. half-written by a task killed mid-write elsewhere).
 void WriteBatchManifest(const std::string& out_dir, const std::vector<BatchCapture>& captures);
+// This executable (/proc/self/exe): child captures and Slurm tasks run the same build.
+std::string ExecutablePath();
 nlohmann::ordered_json ReadJsonIfAny(const std::string& path);
 
 }  // namespace gf

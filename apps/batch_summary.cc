@@ -18,8 +18,8 @@ using json = nlohmann::ordered_json;
 
 // One capture's line of the summary; empty strings where a figure does not apply.
 struct Row {
-  std::string name, status, frames, seconds, ate_m, surfels_with, surfels_without, gain,
-      fill_rate, report, error;
+  std::string name, status, frames, seconds, ate_m, surfels_with, surfels_without, gain, fill_rate,
+      report, error;
 };
 
 std::string Fixed(double value, int digits) {
@@ -28,16 +28,16 @@ std::string Fixed(double value, int digits) {
   return buffer;
 }
 
-// ATE from compare.json (synthetic ground truth) or from the input's groundtruth.txt.
+// ATE from compare.json (synthetic ground truth) or from the ground truth beside the input.
 std::string Ate(const json& compare, const std::string& input, const fs::path& run) {
   if (compare.contains("ate_m") && compare["ate_m"].is_number())
     return Fixed(compare["ate_m"].get<double>(), 4);
-  const fs::path truth = fs::path(input) / "groundtruth.txt";
+  const std::string truth = GroundTruthBeside(input);
   const fs::path estimate = run / "with_fill" / "trajectory.txt";
-  if (!IsRegularFile(truth.string()) || !IsRegularFile(estimate.string())) return "";
+  if (truth.empty() || !IsRegularFile(estimate.string())) return "";
   try {
     const TrajectoryErrorSummary ate =
-        EvaluateTrajectory(ReadTrajectory(truth.string()), ReadTumTrajectory(estimate.string()));
+        EvaluateTrajectory(ReadTrajectory(truth), ReadTumTrajectory(estimate.string()));
     return ate.success ? Fixed(ate.ate_rmse_m, 4) : "";
   } catch (const std::exception&) {
     return "";
@@ -61,10 +61,10 @@ Row MakeRow(const std::string& out_dir, const json& capture) {
   row.surfels_without = compare["without_fill"]["surfels"]["count"].dump();
   const json& with = compare["with_fill"];
   if (with.contains("completeness") && with["completeness"]["overall"].is_object())
-    row.gain = Fixed(with["completeness"]["overall"]["within_2cm"].get<double>() -
-                         compare["without_fill"]["completeness"]["overall"]["within_2cm"]
-                             .get<double>(),
-                     4);
+    row.gain =
+        Fixed(with["completeness"]["overall"]["within_2cm"].get<double>() -
+                  compare["without_fill"]["completeness"]["overall"]["within_2cm"].get<double>(),
+              4);
   if (report["fill"].is_object()) row.fill_rate = Fixed(report["fill"].value("fill_rate", 0.0), 4);
   row.report = row.name + "/report.html";
   return row;
@@ -77,8 +77,7 @@ std::string CsvField(const std::string& text) {
   return quoted + "\"";
 }
 
-void WriteSummary(const std::string& out_dir, const std::vector<Row>& rows,
-                  const BatchSummary& s) {
+void WriteSummary(const std::string& out_dir, const std::vector<Row>& rows, const BatchSummary& s) {
   std::string csv =
       "name,status,frames,seconds,ate_m,surfels_with_fill,surfels_without_fill,"
       "completeness_gain,fill_rate,report,error\n";
@@ -86,26 +85,29 @@ void WriteSummary(const std::string& out_dir, const std::vector<Row>& rows,
   long frames = 0;
   double seconds = 0;
   for (const Row& r : rows) {
-    for (const std::string* f : {&r.name, &r.status, &r.frames, &r.seconds, &r.ate_m,
-                                 &r.surfels_with, &r.surfels_without, &r.gain, &r.fill_rate,
-                                 &r.report, &r.error})
+    for (const std::string* f :
+         {&r.name, &r.status, &r.frames, &r.seconds, &r.ate_m, &r.surfels_with, &r.surfels_without,
+          &r.gain, &r.fill_rate, &r.report, &r.error})
       csv += CsvField(*f) + (f == &r.error ? "\n" : ",");
     table.push_back({r.name, r.status, r.frames, r.seconds, r.ate_m, r.surfels_with,
-                     r.surfels_without, r.gain, r.fill_rate, r.report.empty() ? r.error : "report"});
-    links.push_back({r.report.empty() ? "" : r.name + "/", "", "", "", "", "", "", "", "",
-                     r.report});
+                     r.surfels_without, r.gain, r.fill_rate,
+                     r.report.empty() ? r.error : "report"});
+    links.push_back(
+        {r.report.empty() ? "" : r.name + "/", "", "", "", "", "", "", "", "", r.report});
     frames += r.frames.empty() ? 0 : std::stol(r.frames);
     seconds += r.seconds.empty() ? 0 : std::stod(r.seconds);
   }
   WriteTextFileAtomically((fs::path(out_dir) / "summary.csv").string(), csv);
   HtmlReport html("GlassFusion batch: " + fs::path(out_dir).filename().string());
   html.Paragraph(s.BriefReport() + "; " + std::to_string(frames) + " frames in " +
-                 Fixed(seconds / 60, 1) + " minutes of processing. Each capture was tracked once "
+                 Fixed(seconds / 60, 1) +
+                 " minutes of processing. Each capture was tracked once "
                  "and fused with and without the stereo fill (glassfusion compare).");
-  html.Paragraph("ATE: trajectory error in metres, where the capture has ground truth; gain: "
-                 "completeness (share of the observed true surface within 2 cm of the map) with "
-                 "the fill minus without, where the capture has a ground-truth model; fill rate: "
-                 "share of the keyframes' hole pixels filled.");
+  html.Paragraph(
+      "ATE: trajectory error in metres, where the capture has ground truth; gain: "
+      "completeness (share of the observed true surface within 2 cm of the map) with "
+      "the fill minus without, where the capture has a ground-truth model; fill rate: "
+      "share of the keyframes' hole pixels filled.");
   html.LinkedTable({"capture", "status", "frames", "seconds", "ATE m", "surfels with fill",
                     "without", "gain", "fill rate", "report or error"},
                    table, links);
@@ -148,22 +150,35 @@ std::string WriteSlurmScript(const BatchOptions& options) {
   fs::create_directories(fs::path(dir) / "batch", ec);
   if (ec) throw InputError(dir, "cannot create output folder: " + ec.message());
   WriteBatchManifest(dir, captures);
-  std::error_code self_ec;
-  const std::string self = fs::read_symlink("/proc/self/exe", self_ec).string();
+  const std::string self = ExecutablePath();
   std::string array = "0-" + std::to_string(captures.size() - 1);
   if (options.slurm_max_running > 0) array += "%" + std::to_string(options.slurm_max_running);
   std::string script =
       "#!/bin/bash\n"
-      "# GlassFusion batch as a Slurm job array, one capture per task (glassfusion batch --slurm).\n"
+      "# GlassFusion batch as a Slurm job array, one capture per task (glassfusion batch "
+      "--slurm).\n"
       "# Every node must see the captures, this folder and glassfusion at the same paths.\n"
       "#SBATCH --job-name=glassfusion-batch\n"
-      "#SBATCH --array=" + array + "\n"
-      "#SBATCH --cpus-per-task=" + std::to_string(options.slurm_cpus_per_task) + "\n"
-      "#SBATCH --mem=" + options.slurm_memory + "\n"
-      "#SBATCH --time=" + options.slurm_time + "\n"
-      "#SBATCH --output=" + dir + "/batch/slurm-%A_%a.out\n"
-      "exec '" + self + "' batch '" + fs::absolute(options.manifest).string() + "' --out '" + dir +
-      "'" + (options.config_file.empty() ? "" : " --config '" + fs::absolute(options.config_file).string() + "'") +
+      "#SBATCH --array=" +
+      array +
+      "\n"
+      "#SBATCH --cpus-per-task=" +
+      std::to_string(options.slurm_cpus_per_task) +
+      "\n"
+      "#SBATCH --mem=" +
+      options.slurm_memory +
+      "\n"
+      "#SBATCH --time=" +
+      options.slurm_time +
+      "\n"
+      "#SBATCH --output=" +
+      dir +
+      "/batch/slurm-%A_%a.out\n"
+      "exec '" +
+      self + "' batch '" + fs::absolute(options.manifest).string() + "' --out '" + dir + "'" +
+      (options.config_file.empty()
+           ? ""
+           : " --config '" + fs::absolute(options.config_file).string() + "'") +
       " --task \"$SLURM_ARRAY_TASK_ID\"\n";
   const std::string path = (fs::path(dir) / "batch.sbatch").string();
   WriteTextFileAtomically(path, script);

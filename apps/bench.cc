@@ -297,10 +297,7 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   }
   if (frames.size() < 2) throw InputError(options.input, "bench needs at least 2 frames");
 
-  std::string gt_path = options.gt;
-  for (const char* name : {"groundtruth.txt", "groundtruth.log"})
-    if (gt_path.empty() && IsRegularFile((fs::path(options.input) / name).string()))
-      gt_path = (fs::path(options.input) / name).string();
+  const std::string gt_path = options.gt.empty() ? GroundTruthBeside(options.input) : options.gt;
   Trajectory gt;
   if (!gt_path.empty()) gt = ReadTrajectory(gt_path);
 

@@ -15,6 +15,7 @@
 #include "acquisition/image_io.h"
 #include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
+#include "pipeline/run_sink.h"
 #include "sfm/colmap_io.h"
 
 namespace fs = std::filesystem;
@@ -42,14 +43,6 @@ std::vector<std::string> RunKeyframes(const std::string& run_dir) {
   return stamps;
 }
 
-// "000007_1305031102.160407.png" -> "1305031102.160407".
-std::string StampOfName(const std::string& name) {
-  const size_t underscore = name.find('_');
-  const size_t dot = name.rfind(".png");
-  if (underscore == std::string::npos || dot == std::string::npos || dot <= underscore) return "";
-  return name.substr(underscore + 1, dot - underscore - 1);
-}
-
 }  // namespace
 
 std::string ColmapExportSummary::BriefReport() const {
@@ -73,9 +66,7 @@ ColmapExportSummary RunColmapExport(const std::string& run_dir, const std::strin
                        "no pose for keyframe " + ts);
     ColmapImage image;
     image.id = static_cast<int>(images.size()) + 1;
-    char prefix[16];
-    std::snprintf(prefix, sizeof(prefix), "%06d_", image.id);
-    image.name = prefix + ts + ".png";
+    image.name = IndexedFileName(image.id, ts);
     image.world_from_camera = pose->second;
     fs::copy_file(fs::path(run_dir) / "keyframes" / (ts + kColorSuffix),
                   fs::path(staging) / "images" / image.name);
@@ -128,7 +119,7 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
     std::vector<ColmapImage> images = ReadColmapImages(images_txt);
     Trajectory refined;
     for (const ColmapImage& image : images) {
-      const std::string ts = StampOfName(image.name);
+      const std::string ts = StampOfIndexedName(image.name);
       if (ts.empty())
         throw InputError(images_txt, "image " + image.name + " is not from colmap-export");
       refined.push_back({std::stod(ts), ts, image.world_from_camera});
@@ -168,7 +159,7 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
           break;
         }
       }
-      const std::string ts = StampOfName(name);
+      const std::string ts = StampOfIndexedName(name);
       if (map_path.empty() || ts.empty()) continue;
       ++summary.depth_maps;
       const cv::Mat map = ReadColmapDepthMap(map_path.string());

@@ -15,6 +15,7 @@
 #include "acquisition/trajectory_metrics.h"
 #include "apps/report_html.h"
 #include "apps/run_report.h"
+#include "pipeline/run_sink.h"
 #include "surfels/completeness.h"
 #include "surfels/ply.h"
 #include "surfels/render.h"
@@ -123,8 +124,8 @@ std::vector<std::vector<std::string>> CompletenessRows(const json& compare, cons
   std::vector<std::vector<std::string>> rows;
   const json& w = compare["with_fill"]["completeness"];
   const json& wo = compare["without_fill"]["completeness"];
-  rows.push_back({"all observed surfaces", Percent(w["overall"][within]),
-                  Percent(wo["overall"][within])});
+  rows.push_back(
+      {"all observed surfaces", Percent(w["overall"][within]), Percent(wo["overall"][within])});
   for (const auto& [name, c] : w["per_material"].items())
     rows.push_back({name, Percent(c[within]), Percent(wo["per_material"][name][within])});
   return rows;
@@ -235,9 +236,8 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
   const json run = json::parse(ReadTextFile((dir / "with_fill/report.json").string()));
   const std::string input = c["input"];
   const Trajectory estimate = ReadTumTrajectory((dir / "with_fill/trajectory.txt").string());
-  Trajectory truth;
-  if (IsRegularFile((fs::path(input) / "groundtruth.txt").string()))
-    truth = ReadTrajectory((fs::path(input) / "groundtruth.txt").string());
+  const std::string truth_file = GroundTruthBeside(input);
+  const Trajectory truth = truth_file.empty() ? Trajectory() : ReadTrajectory(truth_file);
   const double ate = c.value("ate_m", 0.0);
   r->Paragraph("Input: " + input +
                ". One tracking run, fused twice: the sensor's depth with the keyframes' stereo "
@@ -245,27 +245,30 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
                RunSummaryText(run, c.contains("ate_m") ? &ate : nullptr));
   r->Heading("The two models");
   const StampedPose& middle = estimate[estimate.size() / 2];
-  char label[32];
-  std::snprintf(label, sizeof(label), "%06d_",
-                run["input"].value("first_frame", 0) + static_cast<int>(estimate.size() / 2));
-  r->Images(Renderings(out_dir, prefix, FrameLabel(label + middle.timestamp_text + ".png")), 440);
+  const int middle_index =
+      run["input"].value("first_frame", 0) + static_cast<int>(estimate.size() / 2);
+  r->Images(
+      Renderings(out_dir, prefix, FrameLabel(IndexedFileName(middle_index, middle.timestamp_text))),
+      440);
   if (c["with_fill"].contains("completeness")) {
-    r->Paragraph("Completeness: the share of the true surfaces the camera saw that have a surfel "
-                 "within 1 cm and within 2 cm (synthetic ground truth).");
+    r->Paragraph(
+        "Completeness: the share of the true surfaces the camera saw that have a surfel "
+        "within 1 cm and within 2 cm (synthetic ground truth).");
     std::vector<std::vector<std::string>> rows = CompletenessRows(c, "within_1cm");
     const std::vector<std::vector<std::string>> cm2 = CompletenessRows(c, "within_2cm");
-    for (size_t i = 0; i < rows.size(); ++i) rows[i].insert(rows[i].end(), cm2[i].begin() + 1,
-                                                            cm2[i].end());
-    r->Table({"surface", "1 cm, with the fill", "1 cm, without", "2 cm, with the fill",
-              "2 cm, without"},
-             rows);
+    for (size_t i = 0; i < rows.size(); ++i)
+      rows[i].insert(rows[i].end(), cm2[i].begin() + 1, cm2[i].end());
+    r->Table(
+        {"surface", "1 cm, with the fill", "1 cm, without", "2 cm, with the fill", "2 cm, without"},
+        rows);
     const json& a = c["with_fill"]["accuracy"];
     if (a["fill_median_m"].is_number())
-      r->Paragraph("Accuracy of the fill's surfels: median distance to the true surface " +
-                   std::to_string(static_cast<int>(std::round(1000 * a["fill_median_m"].get<double>()))) +
-                   " mm, 90% within " +
-                   std::to_string(static_cast<int>(std::round(1000 * a["fill_p90_m"].get<double>()))) +
-                   " mm (" + std::to_string(a["fill_surfels"].get<long>()) + " surfels).");
+      r->Paragraph(
+          "Accuracy of the fill's surfels: median distance to the true surface " +
+          std::to_string(static_cast<int>(std::round(1000 * a["fill_median_m"].get<double>()))) +
+          " mm, 90% within " +
+          std::to_string(static_cast<int>(std::round(1000 * a["fill_p90_m"].get<double>()))) +
+          " mm (" + std::to_string(a["fill_surfels"].get<long>()) + " surfels).");
   }
   std::vector<std::vector<std::string>> sizes;
   for (const char* v : {"with_fill", "without_fill"}) {
@@ -275,8 +278,8 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
                      std::to_string(s["by_source"]["stereo_fill"].get<long>())});
   }
   r->Table({"map", "surfels", "from the sensor", "from the stereo fill"}, sizes);
-  AddSurfelCountFigure(r, {{"with the fill", c["with_fill"]["surfels"]},
-                           {"without", c["without_fill"]["surfels"]}});
+  AddSurfelCountFigure(
+      r, {{"with the fill", c["with_fill"]["surfels"]}, {"without", c["without_fill"]["surfels"]}});
   r->Heading("Trajectory");
   AddTrajectoryFigure(r, estimate, c.contains("ate_m") ? truth : Trajectory());
   r->Heading("Stereo fill");

@@ -112,8 +112,8 @@ void ScoreKeyframe(const std::string& scene_dir, const fs::path& keyframes, cons
   const cv::Mat filled = ReadDepthImage((keyframes / (ts + ".depth_filled.png")).string());
   const cv::Mat holes =
       cv::imread((keyframes / (ts + ".hole_mask.png")).string(), cv::IMREAD_UNCHANGED);
-  const cv::Mat label = cv::imread((fs::path(scene_dir) / "gt/label" / (ts + ".png")).string(),
-                                   cv::IMREAD_UNCHANGED);
+  const cv::Mat label =
+      cv::imread((fs::path(scene_dir) / "gt/label" / (ts + ".png")).string(), cv::IMREAD_UNCHANGED);
   const cv::Mat truth =
       ReadDepthImage((fs::path(scene_dir) / "gt/visible_depth" / (ts + ".png")).string());
   const cv::Mat first_surface =
@@ -149,8 +149,8 @@ FillScore ScoreFill(const std::string& scene_dir, const std::string& run_dir) {
     const std::string name = entry.path().filename().string();
     if (name.size() > suffix.size() &&
         !name.compare(name.size() - suffix.size(), suffix.size(), suffix))
-      ScoreKeyframe(scene_dir, keyframes, name.substr(0, name.size() - suffix.size()),
-                    truth_scale, &score);
+      ScoreKeyframe(scene_dir, keyframes, name.substr(0, name.size() - suffix.size()), truth_scale,
+                    &score);
   }
   return score;
 }
@@ -188,26 +188,30 @@ nlohmann::ordered_json SummariseDatasets(const DemoOptions& options, std::string
 void AddSceneSections(HtmlReport* r, const DemoOptions& options,
                       const synth::SynthSummary& synth_summary, const SensorHoles& sensor) {
   r->Heading("Built-in glass scene");
-  r->Paragraph("A synthetic Kinect v1 capture of a table with frosted and clear glass, shiny metal "
-               "and a matte black box (" + std::to_string(options.frames) + " frames, " +
-               std::to_string(static_cast<int>(1000.0 * synth_summary.seconds_per_frame)) +
-               " ms per frame to render), read back through the same path as a real capture. "
-               "Frame 0: colour, depth, and the holes over the colour image (red: no return, "
-               "blue: projector shadow, green: out of range).");
+  r->Paragraph(
+      "A synthetic Kinect v1 capture of a table with frosted and clear glass, shiny metal "
+      "and a matte black box (" +
+      std::to_string(options.frames) + " frames, " +
+      std::to_string(static_cast<int>(1000.0 * synth_summary.seconds_per_frame)) +
+      " ms per frame to render), read back through the same path as a real capture. "
+      "Frame 0: colour, depth, and the holes over the colour image (red: no return, "
+      "blue: projector shadow, green: out of range).");
   r->Images({{"overview.png", "frame 0 (t = 0 s): colour, depth, holes"}}, 960);
   std::vector<std::vector<std::string>> rows;
   for (int m = 0; m < kMaterials; ++m)
     rows.push_back({MaterialName(m), std::to_string(sensor.pixels[m]),
                     Percent(sensor.pixels[m] ? double(sensor.holes[m]) / sensor.pixels[m] : 0)});
-  r->Paragraph("The sensor's holes per material (ground-truth labels): what the stereo fill is "
-               "for.");
+  r->Paragraph(
+      "The sensor's holes per material (ground-truth labels): what the stereo fill is "
+      "for.");
   r->Table({"material", "pixels", "holes"}, rows);
 }
 
 void AddFillSections(HtmlReport* r, const FillScore& fill) {
   r->Heading("The stereo fill per material");
-  r->Paragraph("Keyframe holes filled by stereo, scored against the true depth of what the colour "
-               "camera sees (through clear glass: the background); good = within 3%.");
+  r->Paragraph(
+      "Keyframe holes filled by stereo, scored against the true depth of what the colour "
+      "camera sees (through clear glass: the background); good = within 3%.");
   std::vector<std::vector<std::string>> rows;
   std::vector<double> errors;
   for (int m = 0; m < kMaterials; ++m) {
@@ -218,10 +222,11 @@ void AddFillSections(HtmlReport* r, const FillScore& fill) {
   }
   r->Table({"material", "hole pixels", "filled", "good", "median error"}, rows);
   const int clear_glass = static_cast<int>(synth::Material::kClearGlass);
-  r->Paragraph("Filled clear-glass pixels that take the glass's depth instead of the "
-               "background's (the goal is none): " +
-               std::to_string(fill.clear_glass_at_glass_depth) + " of " +
-               std::to_string(fill.filled[clear_glass]) + ".");
+  r->Paragraph(
+      "Filled clear-glass pixels that take the glass's depth instead of the "
+      "background's (the goal is none): " +
+      std::to_string(fill.clear_glass_at_glass_depth) + " of " +
+      std::to_string(fill.filled[clear_glass]) + ".");
   r->Figure(HistogramSvg(errors, 10.0, 40, "error of a filled pixel, % of the true depth"),
             "Errors of all " + std::to_string(errors.size()) +
                 " filled keyframe pixels (the last bar: 10% and more).");
@@ -239,9 +244,9 @@ void AddDatasetSection(HtmlReport* r, const std::string& data_dir,
                     j["depth_convention"].get<std::string>(), Percent(j["hole_fraction"]),
                     Percent(j["holes"]["no_return"]), Percent(j["holes"]["shadow"]),
                     Percent(j["holes"]["out_of_range"])});
-  r->Table({"input", "kind", "frames", "size", "depth", "holes", "no return", "shadow",
-            "out of range"},
-           rows);
+  r->Table(
+      {"input", "kind", "frames", "size", "depth", "holes", "no return", "shadow", "out of range"},
+      rows);
 }
 
 nlohmann::ordered_json FillJson(const FillScore& fill) {

@@ -126,9 +126,10 @@ std::string HistogramSvg(const std::vector<double>& values, double max_value, in
   svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
       << "\" font-family=\"sans-serif\" font-size=\"11\">";
   for (double y = 0; y <= max_y + 1e-9; y += sy)
-    svg << "<line x1=\"" << left << "\" x2=\"" << left + w << "\" y1=\"" << top + h * (1 - y / max_y)
-        << "\" y2=\"" << top + h * (1 - y / max_y) << "\" stroke=\"#eee\"/><text x=\"" << left - 5
-        << "\" y=\"" << top + h * (1 - y / max_y) + 4 << "\" text-anchor=\"end\">"
+    svg << "<line x1=\"" << left << "\" x2=\"" << left + w << "\" y1=\""
+        << top + h * (1 - y / max_y) << "\" y2=\"" << top + h * (1 - y / max_y)
+        << "\" stroke=\"#eee\"/><text x=\"" << left - 5 << "\" y=\""
+        << top + h * (1 - y / max_y) + 4 << "\" text-anchor=\"end\">"
         << Number(std::round(100 * y * 10) / 10) << "%</text>";
   for (int b = 0; b < bins; ++b)
     svg << "<rect x=\"" << left + w * b / bins + 1 << "\" y=\"" << top + h * (1 - share[b] / max_y)
@@ -171,9 +172,9 @@ void HtmlReport::LinkedTable(const std::vector<std::string>& header,
     for (size_t j = 0; j < rows[i].size(); ++j) {
       const std::string href = i < hrefs.size() && j < hrefs[i].size() ? hrefs[i][j] : "";
       body_ += "<td>" +
-               (href.empty() ? HtmlEscape(rows[i][j])
-                             : "<a href=\"" + HtmlEscape(href) + "\">" + HtmlEscape(rows[i][j]) +
-                                   "</a>") +
+               (href.empty()
+                    ? HtmlEscape(rows[i][j])
+                    : "<a href=\"" + HtmlEscape(href) + "\">" + HtmlEscape(rows[i][j]) + "</a>") +
                "</td>";
     }
     body_ += "</tr>\n";
@@ -216,7 +217,8 @@ std::string HtmlReport::Html() const {
   return "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + HtmlEscape(title_) +
          "</title><style>body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}"
          "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:4px "
-         "10px;text-align:right}td:first-child,th:first-child{text-align:left}th{background:#f4f4f4}.row{display:flex;gap:16px;flex-wrap:wrap}"
+         "10px;text-align:right}td:first-child,th:first-child{text-align:left}th{background:#"
+         "f4f4f4}.row{display:flex;gap:16px;flex-wrap:wrap}"
          "figure{margin:0.5em 0}figcaption{font-size:0.9em;color:#555}pre{background:#f7f7f7;"
          "padding:8px;overflow-x:auto}</style></head><body>\n<h1>" +
          HtmlEscape(title_) + "</h1>\n" + body_ +

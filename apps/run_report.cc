@@ -7,6 +7,7 @@
 
 #include "acquisition/file_util.h"
 #include "acquisition/trajectory_metrics.h"
+#include "pipeline/run_sink.h"
 
 namespace fs = std::filesystem;
 
@@ -67,9 +68,9 @@ void SetCommandLine(int argc, char** argv) {
   std::string line;
   for (int i = 0; i < argc; ++i) {
     std::string arg = argv[i];
-    const bool plain =
-        !arg.empty() && arg.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                              "0123456789-_./:=,+@%") == std::string::npos;
+    const bool plain = !arg.empty() && arg.find_first_not_of(
+                                           "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                           "0123456789-_./:=,+@%") == std::string::npos;
     if (!plain) {
       std::string quoted = "'";
       for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
@@ -83,13 +84,12 @@ void SetCommandLine(int argc, char** argv) {
 const std::string& CommandLine() { return StoredCommandLine(); }
 
 std::string FrameLabel(const std::string& file) {
-  const size_t underscore = file.find('_');
-  const size_t dot = file.rfind(".png");
-  if (underscore == std::string::npos || dot == std::string::npos || dot < underscore) return file;
-  const std::string index = file.substr(0, underscore);
+  const std::string stamp = StampOfIndexedName(file);
+  if (stamp.empty()) return file;
+  const std::string index = file.substr(0, file.find('_'));
   const size_t nonzero = index.find_first_not_of('0');
-  return "frame " + (nonzero == std::string::npos ? "0" : index.substr(nonzero)) + " (t = " +
-         file.substr(underscore + 1, dot - underscore - 1) + " s)";
+  return "frame " + (nonzero == std::string::npos ? "0" : index.substr(nonzero)) +
+         " (t = " + stamp + " s)";
 }
 
 std::string RunSummaryText(const json& report, const double* ate_m) {
@@ -115,8 +115,12 @@ std::string RunSummaryText(const json& report, const double* ate_m) {
 void AddTrajectoryFigure(HtmlReport* r, const Trajectory& estimate, const Trajectory& truth) {
   if (estimate.size() < 2) return;
   SE3 truth_from_estimate;
-  const bool aligned = truth.size() >= 3 && EvaluateTrajectory(truth, estimate).success;
-  if (aligned) truth_from_estimate = EvaluateTrajectory(truth, estimate).gt_from_estimate;
+  bool aligned = false;
+  if (truth.size() >= 3) {
+    const TrajectoryErrorSummary ate = EvaluateTrajectory(truth, estimate);
+    aligned = ate.success;
+    if (aligned) truth_from_estimate = ate.gt_from_estimate;
+  }
   std::vector<Eigen::Vector3d> est, gt;
   for (const StampedPose& p : estimate)
     est.push_back(truth_from_estimate * p.world_from_camera.translation());
@@ -168,16 +172,16 @@ void AddFillOverlays(HtmlReport* r, const std::string& run_dir, const std::strin
   std::vector<std::pair<std::string, std::string>> images;
   for (size_t i : picks) {
     const std::string& file = files[i];
-    const size_t underscore = file.find('_');
-    if (underscore == std::string::npos) continue;  // no timestamp: keyframes/ names it by index
-    const std::string ts = file.substr(underscore + 1, file.rfind(".png") - underscore - 1);
+    const std::string ts = StampOfIndexedName(file);
+    if (ts.empty()) continue;  // no timestamp: keyframes/ names it by index
     const std::string overlay = "keyframes/" + ts + ".fill_overlay.png";
     if (IsRegularFile((fs::path(run_dir) / overlay).string()))
       images.push_back({prefix + overlay, FrameLabel(file)});
   }
   if (images.empty()) return;
-  r->Paragraph("Keyframes' fill: filled pixels green (cyan: carried from earlier keyframes; "
-               "brighter = more confident), holes left empty magenta.");
+  r->Paragraph(
+      "Keyframes' fill: filled pixels green (cyan: carried from earlier keyframes; "
+      "brighter = more confident), holes left empty magenta.");
   r->Images(images, 320);
 }
 
@@ -213,8 +217,9 @@ void AddSettings(HtmlReport* r, const json& report) {
 
 void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& prefix) {
   static const std::vector<std::pair<std::string, std::string>> files = {
-      {"map.ply", "the surfel map (binary PLY: x y z nx ny nz red green blue radius confidence "
-                  "source)"},
+      {"map.ply",
+       "the surfel map (binary PLY: x y z nx ny nz red green blue radius confidence "
+       "source)"},
       {"mesh.ply", "a triangle mesh of the map (--mesh)"},
       {"trajectory.txt", "every frame's world_from_camera (TUM format)"},
       {"report.json", "everything on this page, as numbers"},
@@ -232,12 +237,12 @@ void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& 
 void WriteRunReport(const std::string& run_dir, const std::string& input) {
   const json report = json::parse(ReadTextFile((fs::path(run_dir) / "report.json").string()));
   const Trajectory estimate = ReadTumTrajectory((fs::path(run_dir) / "trajectory.txt").string());
-  Trajectory truth;
-  const fs::path truth_file = fs::path(input) / "groundtruth.txt";
-  if (IsRegularFile(truth_file.string())) truth = ReadTrajectory(truth_file.string());
+  const std::string truth_file = GroundTruthBeside(input);
+  const Trajectory truth = truth_file.empty() ? Trajectory() : ReadTrajectory(truth_file);
   const TrajectoryErrorSummary ate = EvaluateTrajectory(truth, estimate);
   HtmlReport r("GlassFusion run: " + fs::path(input).filename().string());
-  r.Paragraph("Input: " + input + ". " + RunSummaryText(report, ate.success ? &ate.ate_rmse_m : nullptr));
+  r.Paragraph("Input: " + input + ". " +
+              RunSummaryText(report, ate.success ? &ate.ate_rmse_m : nullptr));
   r.Heading("Trajectory");
   AddTrajectoryFigure(&r, estimate, ate.success ? truth : Trajectory());
   if (report.contains("surfels") && report["surfels"].is_object()) {

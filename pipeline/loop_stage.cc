@@ -28,7 +28,8 @@ std::string ReasonKind(const std::string& reason) {
   std::string kind = reason.substr(0, cut);
   while (!kind.empty() && kind.back() == ' ') kind.pop_back();
   for (const std::string tail : {" by", " to"})
-    if (kind.size() > tail.size() && kind.compare(kind.size() - tail.size(), tail.size(), tail) == 0)
+    if (kind.size() > tail.size() &&
+        kind.compare(kind.size() - tail.size(), tail.size(), tail) == 0)
       kind.resize(kind.size() - tail.size());
   return kind;
 }
@@ -36,7 +37,8 @@ std::string ReasonKind(const std::string& reason) {
 }  // namespace
 
 bool LoopStageOptions::Check(std::string* message) const {
-  if (queue_capacity < 1 || !odometry_noise.Check() || !(gap_sigma_m > 0) || !(gap_sigma_deg > 0) || relocalise_candidates < 1) {
+  if (queue_capacity < 1 || !odometry_noise.Check() || !(gap_sigma_m > 0) || !(gap_sigma_deg > 0) ||
+      relocalise_candidates < 1) {
     if (message)
       *message = "loop closure: positive queue capacity, floors, gap sigmas and candidates";
     return false;
@@ -135,8 +137,8 @@ void LoopClosureStage::Process(const LoopKeyframeItem& item) {
   LoopDetection detection;
   {
     std::shared_lock<std::shared_mutex> lock(database_mutex_);
-    detection = detector_.Detect(*key, estimate, database_,
-                                 [&](int id) { return graph_.pose(id); });
+    detection =
+        detector_.Detect(*key, estimate, database_, [&](int id) { return graph_.pose(id); });
   }
   bool stored_place = false;
   for (const PoseGraphEdge& e : detection.accepted) {
@@ -167,8 +169,7 @@ void LoopClosureStage::Optimise() {
   spdlog::debug("loop closure: {}", s.BriefReport());
   if (!s.success) return;
   std::map<int, SE3> corrections;
-  for (const auto& [id, pose] : graph_.poses())
-    corrections[id] = pose * tracked_.at(id).Inverse();
+  for (const auto& [id, pose] : graph_.poses()) corrections[id] = pose * tracked_.at(id).Inverse();
   corrections_->Publish(std::move(corrections));
 }
 
@@ -200,9 +201,8 @@ std::optional<Relocalisation> LoopClosureStage::Relocalise(const RgbdFrame& fram
   const auto query = MakeLoopKeyframe(-1, frame, SE3(), std::make_shared<FrameFeatures>(features));
   std::shared_lock<std::shared_mutex> lock(database_mutex_);
   std::vector<int> ids;
-  for (const auto& m : database_.QueryAppearance(features.descriptors,
-                                                 options_.relocalise_candidates,
-                                                 [](int) { return true; }))
+  for (const auto& m : database_.QueryAppearance(
+           features.descriptors, options_.relocalise_candidates, [](int) { return true; }))
     ids.push_back(m.id);
   // The newest keyframes too: the vocabulary may not exist yet, and loss is often brief.
   const auto& all = database_.keyframes();
@@ -251,8 +251,8 @@ json LoopClosureStage::Report() const {
           {"optimisations", optimisations_},
           {"optimisation_ms", TimingJson(optimise_ms_)},
           {"keyframe_ms", TimingJson(keyframe_ms_)},
-          {"relocalisation", {{"attempts", relocalisation_attempts_.load()},
-                              {"found", relocalised_.load()}}},
+          {"relocalisation",
+           {{"attempts", relocalisation_attempts_.load()}, {"found", relocalised_.load()}}},
           {"database_bytes", database_.MemoryBytes()},
           {"loops", accepted_}};
 }

@@ -5,8 +5,8 @@
 // (pose_corrections.h), which the fusion stage applies to the map and the run to its trajectory.
 //
 // Keyframes reach it through a bounded queue: for recorded input the tracker waits for room (so
-// that no keyframe is lost), for live input a full queue drops the keyframe (counted; the graph then
-// links the next one to the last it has by a weak edge). It is also the tracker's Relocaliser:
+// that no keyframe is lost), for live input a full queue drops the keyframe (counted; the graph
+// then links the next one to the last it has by a weak edge). It is also the tracker's Relocaliser:
 // a lost frame is looked up in the same database, from the tracking thread.
 //
 // Failures are contained per keyframe: one whose loop search throws is logged and counted, and the
@@ -59,18 +59,18 @@ struct LoopStageOptions {
 // A keyframe as the tracker hands it over, with how it follows from the keyframes before it.
 struct LoopKeyframeItem {
   enum class Link {
-    kFirst,         // the first keyframe: the world frame
-    kOdometry,      // tracked from keyframe `linked_to`
-    kRelocalised,   // found again against keyframe `linked_to` after a loss
-    kRestarted,     // tracking restarted at keyframe `linked_to`'s last good pose (a guess)
+    kFirst,        // the first keyframe: the world frame
+    kOdometry,     // tracked from keyframe `linked_to`
+    kRelocalised,  // found again against keyframe `linked_to` after a loss
+    kRestarted,    // tracking restarted at keyframe `linked_to`'s last good pose (a guess)
   };
-  int id = 0;  // the tracker's keyframe number
-  RgbdFrame frame;  // with the depth tracking used (undistorted, on the stage's camera)
+  int id = 0;             // the tracker's keyframe number
+  RgbdFrame frame;        // with the depth tracking used (undistorted, on the stage's camera)
   SE3 world_from_camera;  // as tracked
   std::shared_ptr<const FrameFeatures> features;
   Link link = Link::kFirst;
   int linked_to = -1;
-  SE3 linked_from_this;  // the measured relative pose
+  SE3 linked_from_this;                     // the measured relative pose
   Matrix6d information = Matrix6d::Zero();  // of that measurement, as the alignment gave it
 };
 

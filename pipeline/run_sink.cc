@@ -27,12 +27,26 @@ cv::Mat ToMillimetres(const cv::Mat& depth_m) {
 }
 
 bool LooksLikeRun(const fs::path& dir) {
-  for (const char* name : {"report.json", "trajectory.txt", "keyframes", "camera.json", "map.ply", "undistorted"})
+  for (const char* name :
+       {"report.json", "trajectory.txt", "keyframes", "camera.json", "map.ply", "undistorted"})
     if (fs::exists(dir / name)) return true;
   return false;
 }
 
 }  // namespace
+
+std::string IndexedFileName(int number, const std::string& timestamp) {
+  char prefix[16];
+  std::snprintf(prefix, sizeof(prefix), "%06d", number);
+  return prefix + (timestamp.empty() ? "" : "_" + timestamp) + ".png";
+}
+
+std::string StampOfIndexedName(const std::string& name) {
+  const size_t underscore = name.find('_');
+  const size_t dot = name.rfind(".png");
+  if (underscore == std::string::npos || dot == std::string::npos || dot <= underscore) return "";
+  return name.substr(underscore + 1, dot - underscore - 1);
+}
 
 cv::Mat FillOverlay(const cv::Mat& color, const CarriedFillResult& fill) {
   cv::Mat out = color.clone();
@@ -93,10 +107,7 @@ void FolderRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& fram
     WriteImage(base + ".color.png", frame.color);  // for colmap-export
   }
   // The pinhole set (undistorted/), colour and depth under the same file name.
-  char index[16];
-  std::snprintf(index, sizeof(index), "%06d", frame.index);
-  const std::string file =
-      std::string(index) + (frame.timestamp_text.empty() ? "" : "_" + frame.timestamp_text) + ".png";
+  const std::string file = IndexedFileName(frame.index, frame.timestamp_text);
   const fs::path pinhole = fs::path(out_dir_) / "undistorted";
   for (const char* sub : {"color", "depth"}) fs::create_directories(pinhole / sub, ec);
   if (ec) throw InputError(pinhole.string(), "cannot create folder: " + ec.message());

@@ -9,7 +9,8 @@
 //                          keyframes; brighter = more confident), holes still empty magenta
 //   <ts>.color.png         the keyframe's colour image (lossless; colmap-export uses it)
 // These keep the input's image geometry (its lens distortion, as camera.json states). The same
-// keyframes on the ideal pinhole camera, as an Open3D / Redwood dataset folder, are in undistorted/:
+// keyframes on the ideal pinhole camera, as an Open3D / Redwood dataset folder, are in
+// undistorted/:
 //   color/<index>_<ts>.png  colour, undistorted (bilinear); <index> is the frame's, 6 digits
 //   depth/<index>_<ts>.png  filled depth (16-bit millimetres, 0 = none), undistorted (nearest)
 //   camera.json             the pinhole camera (no distortion), depth_scale 1000
@@ -102,6 +103,12 @@ class InMemoryRunSink : public RunSink {
  private:
   std::mutex mutex_;
 };
+
+// An image named by a number and a timestamp, <number:06d>_<ts>.png (<number:06d>.png without a
+// timestamp): undistorted/'s files (the frame's index) and colmap-export's (the image id). Sorted
+// by name, they are in number order. StampOfIndexedName gives the timestamp back ("" when none).
+std::string IndexedFileName(int number, const std::string& timestamp);
+std::string StampOfIndexedName(const std::string& name);
 
 // The overlay written as <ts>.fill_overlay.png (see above).
 cv::Mat FillOverlay(const cv::Mat& color, const CarriedFillResult& fill);
