@@ -66,7 +66,7 @@ FusionStage::FusionStage(const Camera& camera, const FusionStageOptions& options
   GF_CHECK(options.Check(&problem), problem);
   for (Variant& v : variants) {
     GF_CHECK(v.sink != nullptr, "every fusion variant needs a sink");
-    maps_.push_back({std::move(v), SurfelFusion(camera, options.fusion), {}, {}, {}, 0});
+    maps_.push_back({std::move(v), SurfelFusion(camera, options.fusion), {}, {}, {}, 0, 0, 0});
   }
   worker_.Start([this] { Run(); });
 }
@@ -163,9 +163,9 @@ void FusionStage::ApplyCorrections() {
   applied_ = std::move(latest);
   applied_version_ = version;
   ++corrections_applied_;
-  spdlog::debug("fusion: maps moved with {} keyframes' corrections in {:.1f} ms", change.size(),
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                    .count());
+  spdlog::debug(
+      "fusion: maps moved with {} keyframes' corrections in {:.1f} ms", change.size(),
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
 }
 
 bool FusionStage::Prediction(int frames, std::chrono::milliseconds timeout, cv::Mat* depth,
@@ -190,6 +190,8 @@ void FusionStage::Fuse(const Item& item, const SE3& world_from_camera, Map* m) {
     } else {
       s = m->fusion.FuseFrame(item.frame, world_from_camera, item.keyframe);
       m->frame_ms.push_back(s.ms);
+      m->redundant += s.redundant;
+      m->over_budget += s.over_budget;
       if (m->fusion.frames() % options_.count_every == 0) Record(m);
     }
     spdlog::debug("{} {} {}: {}", m->variant.name, item.fill ? "fill" : "frame",
@@ -218,6 +220,9 @@ json FusionStage::Report(size_t index) const {
   r["fills_fused"] = m.fill_ms.size();
   r["frame_ms"] = TimingJson(m.frame_ms);
   r["fill_ms"] = TimingJson(m.fill_ms);
+  r["merged_as_copies"] = m.redundant;
+  r["budget"] = options_.fusion.max_surfels;
+  r["removed_over_budget"] = m.over_budget;
   r["failed_items"] = m.failed;
   r["dropped_items"] = dropped_.load();
   r["corrections_applied"] = corrections_applied_;

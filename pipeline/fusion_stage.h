@@ -97,6 +97,7 @@ class FusionStage {
     std::vector<nlohmann::ordered_json> over_time;  // counts every count_every frames
     std::vector<double> frame_ms, fill_ms;
     int failed = 0;
+    long redundant = 0, over_budget = 0;  // surfels merged as copies, removed over the budget
   };
   void Offer(Item item);
   void Run();
@@ -121,7 +122,7 @@ class FusionStage {
   const PoseCorrections* corrections_;
   std::map<int, SE3> applied_;  // corrections the maps are at (worker thread)
   int applied_version_ = 0;
-  int newest_keyframe_ = -1;    // of the items fused so far
+  int newest_keyframe_ = -1;  // of the items fused so far
   int corrections_applied_ = 0;
   StageThread worker_;
 };

@@ -38,9 +38,11 @@ std::string ReasonKind(const std::string& reason) {
 
 bool LoopStageOptions::Check(std::string* message) const {
   if (queue_capacity < 1 || !odometry_noise.Check() || !(gap_sigma_m > 0) || !(gap_sigma_deg > 0) ||
-      relocalise_candidates < 1) {
+      relocalise_candidates < 1 || free_keyframes < 1) {
     if (message)
-      *message = "loop closure: positive queue capacity, floors, gap sigmas and candidates";
+      *message =
+          "loop closure: positive queue capacity, floors, gap sigmas, candidates and "
+          "free keyframes";
     return false;
   }
   return database.Check(message) && detector.Check(message) && graph.Check(message);
@@ -143,6 +145,7 @@ void LoopClosureStage::Process(const LoopKeyframeItem& item) {
   bool stored_place = false;
   for (const PoseGraphEdge& e : detection.accepted) {
     graph_.AddEdge(e);
+    tied_.insert({e.from, e.to});
     const double angle_deg =
         Eigen::AngleAxisd(e.from_from_to.RotationMatrix()).angle() / kRadPerDeg;
     stored_place |= e.from_from_to.translation().norm() <= options_.same_place.max_translation_m &&
@@ -168,6 +171,13 @@ void LoopClosureStage::Optimise() {
   unoptimised_loops_ = false;
   spdlog::debug("loop closure: {}", s.BriefReport());
   if (!s.success) return;
+  // Old keyframes that a loop the graph kept ties: held from now on (free_keyframes).
+  const int newest_free = last_id_ - options_.free_keyframes;
+  std::set<int> kept;
+  for (const PoseGraphEdge& e : graph_.edges())
+    if (e.kind == PoseGraphEdge::Kind::kLoop && !e.rejected) kept.insert({e.from, e.to});
+  for (auto it = tied_.begin(); it != tied_.end() && *it < newest_free; it = tied_.erase(it))
+    if (kept.count(*it)) graph_.Hold(*it);
   std::map<int, SE3> corrections;
   for (const auto& [id, pose] : graph_.poses()) corrections[id] = pose * tracked_.at(id).Inverse();
   corrections_->Publish(std::move(corrections));
@@ -241,6 +251,7 @@ json LoopClosureStage::Report() const {
           {"keyframes_dropped", dropped_.load()},
           {"keyframes_stored", static_cast<int>(database_.keyframes().size())},
           {"keyframes_same_place", same_place_},
+          {"keyframes_held", graph_.held_count()},
           {"keyframes_failed", failed_},
           {"candidates", candidates_},
           {"verified", verified_},

@@ -19,6 +19,7 @@
 #include <atomic>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <shared_mutex>
 #include <vector>
 
@@ -53,6 +54,12 @@ struct LoopStageOptions {
   // its features and depth are not kept, so the database grows with the places a capture visits,
   // not with its length.
   KeyframePolicy same_place;
+  // After an optimisation, a keyframe that a verified loop ties to another and that is more than
+  // this many keyframes older than the newest is held at its optimised pose: its place is
+  // settled, and later loops move only the newer keyframes and those no loop has tied yet. An
+  // optimisation then costs about the same however long the capture (a loop over a long stretch
+  // without loops still moves that whole stretch).
+  int free_keyframes = 50;
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -116,6 +123,7 @@ class LoopClosureStage : public Relocaliser {
   LoopDetector detector_;
   PoseGraph graph_;
   std::map<int, SE3> tracked_;  // world_from_keyframe as tracked, by id
+  std::set<int> tied_;          // keyframes a loop edge ties, not yet held
   int last_id_ = -1;
   bool unoptimised_loops_ = false;
   nlohmann::ordered_json accepted_ = nlohmann::ordered_json::array();

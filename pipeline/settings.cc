@@ -56,7 +56,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixe
                                    confidence_sigma, stable_confidence, unstable_frames,
                                    fill_weight, fill_stable_confidence, fill_unstable_frames,
                                    free_space_margin, free_space_penalty, max_neighbour_step,
-                                   normal_filter_px, normal_filter_depth_m, normal_baseline_px)
+                                   normal_filter_px, normal_filter_depth_m, normal_baseline_px,
+                                   max_surfels)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(KeyframeDatabaseOptions, words, vocabulary_keyframes,
                                    kmeans_iterations)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(AlignmentNoise, floor_m, floor_deg, bias)
@@ -71,7 +72,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PoseGraphOptions, max_loop_chi2, loop_huber, 
                                    max_rejections)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopStageOptions, database, detector, graph, queue_capacity,
                                    odometry_noise, gap_sigma_m, gap_sigma_deg,
-                                   relocalise_candidates)
+                                   relocalise_candidates, free_keyframes)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionStageOptions, fusion, queue_capacity, count_every,
                                    fuse_carried)
 

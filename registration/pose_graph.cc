@@ -30,8 +30,9 @@ const char* EdgeKindName(PoseGraphEdge::Kind kind) {
 bool PoseGraphOptions::Check(std::string* message) const {
   if (!(max_loop_chi2 > 0) || !(loop_huber > 0) || max_iterations < 1 || max_rejections < 0) {
     if (message)
-      *message = "pose graph: need max_loop_chi2 > 0, loop_huber > 0, max_iterations >= 1, "
-                 "max_rejections >= 0";
+      *message =
+          "pose graph: need max_loop_chi2 > 0, loop_huber > 0, max_iterations >= 1, "
+          "max_rejections >= 0";
     return false;
   }
   return true;
@@ -40,10 +41,10 @@ bool PoseGraphOptions::Check(std::string* message) const {
 std::string PoseGraphSummary::BriefReport() const {
   char buffer[240];
   std::snprintf(buffer, sizeof(buffer),
-                "pose graph %s (%s): %d nodes, %d edges (%d loops), %d solves, %d iterations, "
-                "cost %.4g -> %.4g, %d loops rejected, %.1f ms",
-                success ? "ok" : "failed", termination.c_str(), nodes, edges, loop_edges, solves,
-                iterations, initial_cost, final_cost, rejected, ms);
+                "pose graph %s (%s): %d nodes free, %d held, %d edges (%d loops), %d solves, "
+                "%d iterations, cost %.4g -> %.4g, %d loops rejected, %.1f ms",
+                success ? "ok" : "failed", termination.c_str(), nodes, held, edges, loop_edges,
+                solves, iterations, initial_cost, final_cost, rejected, ms);
   return buffer;
 }
 
@@ -51,9 +52,8 @@ Matrix6d InformationWithFloor(const Matrix6d& alignment_information, double sigm
                               double sigma_rad) {
   // Covariance of the alignment: the pseudo-inverse of its information, with directions of
   // (numerically) no information left at a variance far beyond any scene (1e6: a kilometre).
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(0.5 *
-                                                      (alignment_information +
-                                                       alignment_information.transpose()));
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(
+      0.5 * (alignment_information + alignment_information.transpose()));
   Eigen::Matrix<double, 6, 1> variances;
   for (int i = 0; i < 6; ++i) {
     const double lambda = eigen.eigenvalues()(i);
@@ -101,6 +101,11 @@ const SE3& PoseGraph::pose(int id) const {
   return it->second;
 }
 
+void PoseGraph::Hold(int id) {
+  GF_CHECK(HasNode(id), "no such pose-graph node");
+  held_.insert(id);
+}
+
 void PoseGraph::SetPose(int id, const SE3& world_from_node) {
   GF_CHECK(HasNode(id), "no such pose-graph node");
   poses_[id] = world_from_node;
@@ -121,10 +126,14 @@ PoseGraphSummary PoseGraph::Solve(const PoseGraphOptions& options, std::map<int,
   for (auto& [id, block] : *blocks) {
     problem.AddParameterBlock(block.q, 4, new ceres::EigenQuaternionManifold);
     problem.AddParameterBlock(block.t, 3);
+    if (!Free(id)) {
+      problem.SetParameterBlockConstant(block.q);
+      problem.SetParameterBlockConstant(block.t);
+    }
   }
   PoseGraphSummary s;
   for (const PoseGraphEdge& e : edges_) {
-    if (e.rejected) continue;
+    if (!InSolve(e)) continue;
     const bool loop = e.kind == PoseGraphEdge::Kind::kLoop;
     ceres::LossFunction* loss = loop ? new ceres::HuberLoss(options.loop_huber) : nullptr;
     Block& a = blocks->at(e.from);
@@ -134,9 +143,6 @@ PoseGraphSummary PoseGraph::Solve(const PoseGraphOptions& options, std::map<int,
     ++s.edges;
     s.loop_edges += loop;
   }
-  Block& first = blocks->begin()->second;
-  problem.SetParameterBlockConstant(first.q);
-  problem.SetParameterBlockConstant(first.t);
   ceres::Solver::Options solver;
   solver.max_num_iterations = options.max_iterations;
   solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
@@ -157,7 +163,8 @@ PoseGraphSummary PoseGraph::Optimize(const PoseGraphOptions& options) {
   GF_CHECK(options.Check(&problem), problem);
   const auto start = std::chrono::steady_clock::now();
   PoseGraphSummary total;
-  total.nodes = static_cast<int>(poses_.size());
+  total.held = static_cast<int>(held_.size());
+  for (const auto& [id, pose] : poses_) total.nodes += Free(id);
   if (poses_.size() < 2 || edges_.empty()) {
     total.success = true;
     total.termination = "nothing to optimise";
@@ -166,12 +173,20 @@ PoseGraphSummary PoseGraph::Optimize(const PoseGraphOptions& options) {
   // Each solve starts from the estimates before this call, so a rejected edge leaves no trace.
   const std::map<int, SE3> initial = poses_;
   for (int round = 0;; ++round) {
-    std::map<int, Block> blocks;
+    std::map<int, Block> blocks;  // the nodes of the edges in the solve
     poses_ = initial;
-    for (const auto& [id, pose] : poses_) {
-      Block& b = blocks[id];
-      Eigen::Map<Eigen::Vector4d>(b.q) = pose.rotation().coeffs();
-      Eigen::Map<Eigen::Vector3d>(b.t) = pose.translation();
+    for (const PoseGraphEdge& e : edges_) {
+      if (!InSolve(e)) continue;
+      for (const int id : {e.from, e.to}) {
+        Block& b = blocks[id];
+        Eigen::Map<Eigen::Vector4d>(b.q) = poses_.at(id).rotation().coeffs();
+        Eigen::Map<Eigen::Vector3d>(b.t) = poses_.at(id).translation();
+      }
+    }
+    if (blocks.empty()) {  // every edge between held nodes
+      total.success = true;
+      total.termination = "nothing free to optimise";
+      break;
     }
     const PoseGraphSummary s = Solve(options, &blocks);
     if (round == 0) total.initial_cost = s.initial_cost;
@@ -188,7 +203,7 @@ PoseGraphSummary PoseGraph::Optimize(const PoseGraphOptions& options) {
     // The least plausible loop edge beyond the test is rejected, and the graph solved again.
     PoseGraphEdge* worst = nullptr;
     for (PoseGraphEdge& e : edges_) {
-      if (e.rejected) continue;
+      if (!InSolve(e)) continue;
       e.chi2 = Chi2(e);
       if (e.kind == PoseGraphEdge::Kind::kLoop && e.chi2 > options.max_loop_chi2 &&
           (!worst || e.chi2 > worst->chi2))
@@ -199,8 +214,8 @@ PoseGraphSummary PoseGraph::Optimize(const PoseGraphOptions& options) {
     worst->rejected = true;
     ++total.rejected;
   }
-  total.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                 .count();
+  total.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return total;
 }
 

@@ -11,7 +11,9 @@
 // Huber loss. After optimising, loop edges whose whitened squared residual exceeds
 // max_loop_chi2 (3 sigma of a chi-square with 6 degrees of freedom: 20.06) are implausible
 // (RTAB-Map's rule); the worst is rejected and the graph re-optimised, until none remains.
-// The first node is held fixed (the world frame is the first keyframe's).
+// The first node is held fixed (the world frame is the first keyframe's), and so is every node
+// the caller holds (Hold): a solve moves only the other nodes, over the edges that touch one of
+// them, so its cost follows the nodes left free, not the graph's size.
 //
 // No threads, no I/O. Usage:
 //   gf::PoseGraph graph;
@@ -24,6 +26,7 @@
 
 #include <Eigen/Core>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -40,8 +43,8 @@ struct PoseGraphEdge {
     kRelocalisation,  // tracking lost, then found again against an earlier keyframe
     kGap,             // tracking lost and restarted at the last good pose: a weak guess
   };
-  int from = 0, to = 0;  // node ids
-  SE3 from_from_to;      // measured pose of `to` in `from`'s frame
+  int from = 0, to = 0;                         // node ids
+  SE3 from_from_to;                             // measured pose of `to` in `from`'s frame
   Matrix6d information = Matrix6d::Identity();  // of a left perturbation [rho; phi]
   Kind kind = Kind::kOdometry;
   bool rejected = false;  // by the graph's plausibility test (loop edges only)
@@ -55,15 +58,16 @@ struct PoseGraphOptions {
   double max_loop_chi2 = 20.06;
   // Loop edges are robustified by a Huber loss of this scale, in whitened units (sigmas).
   double loop_huber = 3.0;
-  int max_iterations = 100;      // Levenberg-Marquardt iterations per solve
-  int max_rejections = 10;       // loop edges rejected (and re-solves) per Optimize() at most
+  int max_iterations = 100;  // Levenberg-Marquardt iterations per solve
+  int max_rejections = 10;   // loop edges rejected (and re-solves) per Optimize() at most
   bool Check(std::string* message = nullptr) const;
 };
 
 struct PoseGraphSummary {
   bool success = false;
-  std::string termination;  // Ceres' message, or why it was not run
-  int nodes = 0, edges = 0, loop_edges = 0;
+  std::string termination;                   // Ceres' message, or why it was not run
+  int nodes = 0, edges = 0, loop_edges = 0;  // in the solve (nodes: those free to move)
+  int held = 0;                              // nodes held at their estimates
   int solves = 0, iterations = 0;
   int rejected = 0;  // loop edges rejected by this call
   double initial_cost = 0, final_cost = 0;
@@ -79,8 +83,8 @@ struct PoseGraphSummary {
 // v = |t| + depth * angle (metres). Then sigma = floor_m + bias * v (metres) and
 // floor_deg + bias * v / depth (radians, in degrees).
 struct AlignmentNoise {
-  double floor_m = 0.003;   // per translation axis, metres
-  double floor_deg = 0.2;   // per rotation axis, degrees
+  double floor_m = 0.003;  // per translation axis, metres
+  double floor_deg = 0.2;  // per rotation axis, degrees
   // Standard deviation per metre of viewpoint change (dimensionless). 0.1: on tum_fr1_xyz_head,
   // against the ground truth, loop edges were off by about 2 cm at about 14 cm of viewpoint change
   // (0.15) and consecutive keyframes by 3 mm at 4.4 cm (0.07).
@@ -108,9 +112,13 @@ class PoseGraph {
   bool HasNode(int id) const { return poses_.count(id) != 0; }
   const SE3& pose(int id) const;
   void SetPose(int id, const SE3& world_from_node);
+  // Holds a node at its current estimate in every later Optimize() (the node must exist).
+  void Hold(int id);
+  bool held(int id) const { return held_.count(id) != 0; }
+  int held_count() const { return static_cast<int>(held_.size()); }
   const std::map<int, SE3>& poses() const { return poses_; }
   const std::vector<PoseGraphEdge>& edges() const { return edges_; }
-  // Solves from the current estimates; the first node (smallest id) stays fixed.
+  // Solves from the current estimates; the first node (smallest id) and the held ones stay fixed.
   PoseGraphSummary Optimize(const PoseGraphOptions& options);
   // Whitened squared residual of an edge at the current estimates.
   double Chi2(const PoseGraphEdge& edge) const;
@@ -122,8 +130,11 @@ class PoseGraph {
     double t[3];
   };
   PoseGraphSummary Solve(const PoseGraphOptions& options, std::map<int, Block>* blocks);
+  bool Free(int id) const { return id != poses_.begin()->first && !held(id); }
+  bool InSolve(const PoseGraphEdge& e) const { return !e.rejected && (Free(e.from) || Free(e.to)); }
   std::map<int, SE3> poses_;
   std::vector<PoseGraphEdge> edges_;
+  std::set<int> held_;
 };
 
 }  // namespace gf

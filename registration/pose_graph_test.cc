@@ -58,8 +58,8 @@ TEST(RelativePoseError, IsZeroAtTheMeasurementAndGrowsWithTheInformation) {
                   PoseGraphEdge::Kind::kOdometry};
   EXPECT_NEAR(graph.Chi2(e), 0.0, 1e-12);
   // 1 cm off along x with sigma 1 cm: chi2 1.
-  e.from_from_to = SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.01, 0, 0)) *
-                   e.from_from_to;
+  e.from_from_to =
+      SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.01, 0, 0)) * e.from_from_to;
   EXPECT_NEAR(graph.Chi2(e), 1.0, 1e-6);
 }
 
@@ -71,8 +71,8 @@ TEST(InformationWithFloor, AddsTheFloorAndKeepsUnconstrainedDirectionsFree) {
   const Matrix6d info = InformationWithFloor(icp, 0.003, 0.004);
   const Matrix6d covariance = info.inverse();
   EXPECT_NEAR(std::sqrt(covariance(2, 2)), 0.003, 1e-4);  // the floor dominates
-  EXPECT_GT(covariance(0, 0), 1e3);                      // x is free
-  EXPECT_GT(covariance(5, 5), 1e3);                      // so is the roll about the axis
+  EXPECT_GT(covariance(0, 0), 1e3);                       // x is free
+  EXPECT_GT(covariance(5, 5), 1e3);                       // so is the roll about the axis
 }
 
 // The information of an alignment known to sigma_m and sigma_rad per axis.
@@ -118,8 +118,8 @@ LoopScenario MakeLoop(int n, uint32_t seed) {
   s.odometry.push_back(s.truth[0]);
   s.graph.AddNode(0, s.truth[0]);
   for (int i = 1; i < n; ++i) {
-    const SE3 measured = (s.truth[i - 1].Inverse() * s.truth[i]) * bias *
-                         RandomPose(&rng, 0.002, 0.002);
+    const SE3 measured =
+        (s.truth[i - 1].Inverse() * s.truth[i]) * bias * RandomPose(&rng, 0.002, 0.002);
     s.odometry.push_back(s.odometry.back() * measured);
     s.graph.AddNode(i, s.odometry.back());
     s.graph.AddEdge({i - 1, i, measured, odometry_information, PoseGraphEdge::Kind::kOdometry});
@@ -127,7 +127,8 @@ LoopScenario MakeLoop(int n, uint32_t seed) {
   const Matrix6d loop_information = Isotropic(0.003, 0.003);
   for (int k = 0; k < 3; ++k) {
     const int from = k, to = n - 3 + k;
-    s.graph.AddEdge({from, to, s.truth[from].Inverse() * s.truth[to] * RandomPose(&rng, 0.002, 0.002),
+    s.graph.AddEdge({from, to,
+                     s.truth[from].Inverse() * s.truth[to] * RandomPose(&rng, 0.002, 0.002),
                      loop_information, PoseGraphEdge::Kind::kLoop});
   }
   return s;
@@ -153,7 +154,7 @@ TEST(PoseGraph, ClosingALoopRemovesMostOfTheDrift) {
   ASSERT_TRUE(summary.success) << summary.BriefReport();
   EXPECT_EQ(summary.rejected, 0);
   const double after = Rmse(s.truth, s.graph.poses());
-  EXPECT_GT(before, 0.1);  // the drift is real: decimetres
+  EXPECT_GT(before, 0.1);                                    // the drift is real: decimetres
   EXPECT_LT(after, 0.35 * before) << summary.BriefReport();  // measured: 0.26
   // The first node is the fixed gauge.
   EXPECT_LT((s.graph.pose(0).translation() - s.truth[0].translation()).norm(), 1e-9);
@@ -173,6 +174,27 @@ TEST(PoseGraph, RejectsAWrongLoopAndKeepsTheRightOnes) {
   for (const PoseGraphEdge& e : s.graph.edges())
     EXPECT_EQ(e.rejected, e.from == 5 && e.to == 30) << e.from << "-" << e.to;
   EXPECT_LT(Rmse(s.truth, s.graph.poses()), Rmse(clean.truth, clean.graph.poses()) + 0.005);
+}
+
+// Held nodes stay where they are; the solve covers only the free nodes and the edges that touch
+// them, and brings those back to where the whole graph's solve put them.
+TEST(PoseGraph, HeldNodesStayAndTheSolveCoversOnlyTheFreeOnes) {
+  LoopScenario s = MakeLoop(60, 1);
+  ASSERT_TRUE(s.graph.Optimize({}).success);
+  const std::map<int, SE3> solved = s.graph.poses();
+  for (int id = 1; id < 40; ++id) s.graph.Hold(id);
+  std::mt19937 rng(7);
+  for (int id = 40; id < 60; ++id)
+    s.graph.SetPose(id, solved.at(id) * RandomPose(&rng, 0.05, 0.05));
+  const PoseGraphSummary summary = s.graph.Optimize({});
+  ASSERT_TRUE(summary.success) << summary.BriefReport();
+  EXPECT_EQ(summary.nodes, 20);
+  EXPECT_EQ(summary.held, 39);
+  EXPECT_EQ(summary.edges, 20 + 3);  // odometry 39-40 ... 58-59, and the three loop edges
+  for (int id = 0; id < 40; ++id)
+    EXPECT_EQ(s.graph.pose(id).translation(), solved.at(id).translation()) << id;
+  for (int id = 40; id < 60; ++id)
+    EXPECT_LT((s.graph.pose(id).translation() - solved.at(id).translation()).norm(), 0.002) << id;
 }
 
 TEST(PoseGraph, RefusesEdgesToMissingNodes) {

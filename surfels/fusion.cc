@@ -17,20 +17,6 @@ constexpr double kDegToRad = M_PI / 180.0;
 
 }  // namespace
 
-
-struct SurfelFusion::Measurement {
-  const cv::Mat& depth;   // CV_32F metres
-  const cv::Mat& mask;    // CV_8U pixels to fuse (empty: every valid one)
-  const cv::Mat& weight;  // CV_32F per-pixel weight (empty: 1)
-  double weight_scale;    // times every weight (fill_weight for fills)
-  DepthSource source;
-  const cv::Mat& color;  // CV_8UC3 BGR (may be empty)
-  SE3 world_from_camera;
-  int keyframe;
-  bool time_step;  // a sensor frame: cleanup follows
-  int grid_offset;
-};
-
 bool FusionOptions::Check(std::string* message) const {
   auto fail = [&](const char* m) {
     if (message) *message = m;
@@ -48,14 +34,16 @@ bool FusionOptions::Check(std::string* message) const {
     return fail("fusion: the normals' filter needs a positive size and depth scale");
   if (!(free_space_margin >= 0) || !(free_space_penalty >= 0) || !(max_neighbour_step > 0))
     return fail("fusion: free-space margin and penalty >= 0, positive neighbour step");
+  if (max_surfels < 1) return fail("fusion: max_surfels must be positive");
   return true;
 }
 
 std::string FusionStats::BriefReport() const {
-  char buffer[200];
+  char buffer[240];
   std::snprintf(buffer, sizeof(buffer),
-                "fusion: %d pixels, %d merged, %d new, %d removed (%d seen through), %.1f ms",
-                measured, merged, created, removed, contradicted, ms);
+                "fusion: %d pixels, %d merged, %d new, %d removed (%d seen through, %d redundant, "
+                "%d over budget), %.1f ms",
+                measured, merged, created, removed, contradicted, redundant, over_budget, ms);
   return buffer;
 }
 
@@ -290,75 +278,6 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
       Touch(map_.size() - 1);
       ++stats->created;
     }
-  }
-}
-
-void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
-  // Free space: the surfels projected into this frame (those created just now were not) that the
-  // sensor sees through: every measured depth in the 3x3 pixels around theirs lies farther by more
-  // than free_space_margin, and at least five of them are measured.
-  const size_t entries = visible_.size();
-  std::vector<uint8_t> seen_through(entries, 0);
-  const int width = camera_.width, height = camera_.height;
-  const float margin = static_cast<float>(1.0 + options_.free_space_margin);
-  cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
-    for (int e = range.start; e < range.end; ++e) {
-      const int pixel = pixel_of_[e];
-      const Surfel& s = map_[visible_[e]];
-      if (pixel < 0 || s.removed() || s.last_frame == frame_) continue;
-      const int x = pixel % width, y = pixel / width;
-      if (x < 1 || y < 1 || x + 1 >= width || y + 1 >= height) continue;
-      const float z = in_camera_[e].z();
-      int measured = 0;
-      bool behind = true;
-      for (int dy = -1; dy <= 1 && behind; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const float d = m.depth.at<float>(y + dy, x + dx);
-          if (!(d > 0)) continue;
-          ++measured;
-          if (d <= z * margin) {
-            behind = false;
-            break;
-          }
-        }
-      seen_through[e] = behind && measured >= 5;
-    }
-  });
-  for (size_t e = 0; e < entries; ++e) {
-    if (!seen_through[e]) continue;
-    const size_t i = visible_[e];
-    Surfel& s = map_[i];
-    ++stats->contradicted;
-    const bool stable_sensor =
-        s.source == static_cast<uint8_t>(DepthSource::kSensor) && IsStable(s);
-    s.confidence -= static_cast<float>(options_.free_space_penalty);
-    if (!stable_sensor || s.confidence <= 0) {
-      map_.Remove(i);
-      ++stats->removed;
-    }
-  }
-  // Unstable surfels that nothing confirmed in time: those in view every frame, the whole map
-  // every kFullSweep frames (out of view, they cannot be confirmed anyway).
-  auto stale = [&](size_t i) {
-    const Surfel& s = map_[i];
-    if (s.removed() || IsStable(s)) return;
-    const bool fill = s.source != static_cast<uint8_t>(DepthSource::kSensor);
-    const int window = fill ? options_.fill_unstable_frames : options_.unstable_frames;
-    if (frame_ - s.last_frame > window) {
-      map_.Remove(i);
-      ++stats->removed;
-    }
-  };
-  constexpr int kFullSweep = 16;
-  if (frame_ % kFullSweep == 0) {
-    for (size_t i = 0; i < map_.size(); ++i) stale(i);
-  } else {
-    for (size_t e = 0; e < entries; ++e) stale(visible_[e]);
-  }
-  const size_t before = map_.size();
-  map_.Compact();
-  if (map_.size() != before) {  // indices moved: every chunk is new
-    chunks_.assign((map_.size() + kChunk - 1) / kChunk, Chunk());
   }
 }
 

@@ -17,7 +17,13 @@
 //  4. after a sensor frame: a surfel that the sensor sees through (every measured depth around its
 //     pixel farther than it by free_space_margin) loses confidence (unstable surfels and fills are
 //     removed); unstable surfels not updated for unstable_frames frames are removed, unconfirmed
-//     fills after fill_unstable_frames.
+//     fills after fill_unstable_frames;
+//  5. redundant surfels merge: a surfel hidden in the index map behind another that the
+//     association would take for the same surface (same pixel, depth within free_space_margin,
+//     normals within max_normal_angle_deg) is merged into the more confident of the two, so
+//     passes over the same surface do not stack copies of it;
+//  6. the map holds at most max_surfels: beyond it, the least confirmed surfels go (unstable
+//     first, then the stable ones seen longest ago).
 // Radius: sqrt(2) z / f / |n_z|, at most twice the head-on radius. Fills count fill_weight of a
 // sensor measurement, so one keyframe's fill alone never reaches fill_stable_confidence: a fill
 // becomes part of the model only when other keyframes' fills or the sensor confirm it.
@@ -62,6 +68,8 @@ struct FusionOptions {
                                          // surfel to contradict it
   double free_space_penalty = 1.0;       // confidence a stable surfel loses per contradiction
   double max_neighbour_step = 0.05;      // normals only from neighbours within this relative step
+  // The map's budget, in surfels (48 bytes each: 4 M is 192 MB); beyond it the least confirmed go.
+  long max_surfels = 4'000'000;
   // Normals come from the depth smoothed by a bilateral filter at half size: its diameter in
   // half-size pixels and its depth sigma in metres; then from the smoothed depth this many
   // full-size pixels either side.
@@ -78,6 +86,8 @@ struct FusionStats {
   int created = 0;       // ... that started one
   int removed = 0;       // surfels removed after the step
   int contradicted = 0;  // surfels the sensor saw through
+  int redundant = 0;     // surfels merged into another of the same surface
+  int over_budget = 0;   // surfels removed to keep the map within max_surfels
   double ms = 0;
   std::string BriefReport() const;
 };
@@ -123,7 +133,19 @@ class SurfelFusion {
   void AddSurfels(const std::vector<Surfel>& surfels);
 
  private:
-  struct Measurement;
+  // One fusion step's input.
+  struct Measurement {
+    const cv::Mat& depth;   // CV_32F metres
+    const cv::Mat& mask;    // CV_8U pixels to fuse (empty: every valid one)
+    const cv::Mat& weight;  // CV_32F per-pixel weight (empty: 1)
+    double weight_scale;    // times every weight (fill_weight for fills)
+    DepthSource source;
+    const cv::Mat& color;  // CV_8UC3 BGR (may be empty)
+    SE3 world_from_camera;
+    int keyframe;
+    bool time_step;  // a sensor frame: cleanup follows
+    int grid_offset;
+  };
   // One measured pixel after association.
   struct PixelResult {
     int match = -1;  // surfel index, -1 none
@@ -140,10 +162,12 @@ class SurfelFusion {
                     PixelResult* res) const;
   // The surfel (map index) the measured pixel at (x, y) associates with, -1 none.
   int NearestAlongRay(const StepConstants& k, int x, int y, const PixelResult& res) const;
-  void Integrate(const Measurement& m, const std::vector<PixelResult>& results,
-                 FusionStats* stats);
+  void Integrate(const Measurement& m, const std::vector<PixelResult>& results, FusionStats* stats);
   void ProjectMap(const SE3& camera_from_world);
   void CleanUp(const Measurement& m, FusionStats* stats);
+  void RemoveSeenThrough(const Measurement& m, FusionStats* stats);
+  void MergeRedundant(const Measurement& m, FusionStats* stats);
+  void KeepWithinBudget(FusionStats* stats);
   void Touch(size_t surfel) { chunks_[surfel / kChunk].dirty = true; }
   bool ChunkVisible(size_t chunk, const SE3& camera_from_world);
 
@@ -161,7 +185,7 @@ class SurfelFusion {
 
   Camera camera_;
   FusionOptions options_;
-  cv::Mat rays_;  // CV_32FC2: each pixel's ray (x/z, y/z), lens distortion removed
+  cv::Mat rays_;           // CV_32FC2: each pixel's ray (x/z, y/z), lens distortion removed
   cv::Mat radial_weight_;  // CV_32F: each pixel's weight by its distance from the image centre
   SurfelMap map_;
   int frame_ = 0;  // time steps (sensor frames) so far

@@ -98,6 +98,52 @@ TEST(SurfelFusion, FreeSpaceRemovesWhatTheSensorSeesThrough) {
   EXPECT_EQ(fills(), 0);
 }
 
+// A second pass over a wall, its copy of the wall 5 mm off (as a pass with a slightly different
+// pose leaves it), merges into the first instead of stacking on it; a surface 20 cm behind the
+// wall is a different surface and stays.
+TEST(SurfelFusion, ACopyOfASurfaceMergesAndASurfaceBehindItStays) {
+  const Camera camera = SmallCamera();
+  SurfelFusion fusion(camera, {}), reference(camera, {});
+  const SE3 pose = At(0, 0, 0);
+  for (int i = 0; i < 15; ++i) fusion.FuseFrame(Wall(camera, pose), pose, 0);
+  for (int i = 0; i < 18; ++i) reference.FuseFrame(Wall(camera, pose), pose, 0);
+  const std::vector<Surfel> wall = fusion.StableSurfels();
+  ASSERT_GT(wall.size(), 2000u);
+  std::vector<Surfel> copy = wall, behind = wall;
+  for (Surfel& s : copy) s.position.z() += 0.005f;
+  for (Surfel& s : behind) s.position.z() += 0.2f;
+  fusion.AddSurfels(copy);
+  fusion.AddSurfels(behind);
+  FusionStats total;
+  for (int i = 0; i < 3; ++i)
+    total.redundant += fusion.FuseFrame(Wall(camera, pose), pose, 0).redundant;
+  EXPECT_GT(total.redundant, static_cast<int>(wall.size() * 8 / 10));
+  int near_wall = 0, far_wall = 0;
+  for (const Surfel& s : fusion.StableSurfels()) {
+    near_wall += std::abs(s.position.z() - 1.5f) < 0.01f;
+    far_wall += std::abs(s.position.z() - 1.7f) < 0.01f;
+  }
+  // One wall, not two: about as many surfels as the same frames fused without the copy.
+  EXPECT_LT(near_wall, static_cast<int>(reference.StableSurfels().size() * 11 / 10));
+  EXPECT_EQ(far_wall, static_cast<int>(behind.size()));
+}
+
+// A map over its budget drops the least confirmed surfels and keeps fusing.
+TEST(SurfelFusion, TheMapStaysWithinItsBudget) {
+  const Camera camera = SmallCamera();
+  FusionOptions options;
+  options.max_surfels = 1500;
+  SurfelFusion fusion(camera, options);
+  int over = 0;
+  for (int i = 0; i < 20; ++i) {
+    const SE3 pose = At(0.01 * i, 0, 0);
+    over += fusion.FuseFrame(Wall(camera, pose), pose, 0).over_budget;
+    ASSERT_LE(fusion.map().live(), 1500u);
+  }
+  EXPECT_GT(over, 0);
+  EXPECT_GT(fusion.StableSurfels().size(), 500u);
+}
+
 // One keyframe's fill is not enough for the model; a second one that agrees confirms it.
 TEST(SurfelFusion, AFillNeedsASecondKeyframeToBecomeStable) {
   const Camera camera = SmallCamera();

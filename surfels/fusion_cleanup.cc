@@ -1,0 +1,179 @@
+// After a sensor frame: what the sensor contradicts, what nothing confirmed, redundant copies of a
+// surface, and the budget.
+#include <algorithm>
+#include <cmath>
+#include <opencv2/core/utility.hpp>
+
+#include "surfels/fusion.h"  // NOLINT: the class's third source file
+
+namespace gf {
+
+void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
+  RemoveSeenThrough(m, stats);
+  MergeRedundant(m, stats);
+  // Unstable surfels that nothing confirmed in time: those in view every frame, the whole map
+  // every kFullSweep frames (out of view, they cannot be confirmed anyway).
+  auto stale = [&](size_t i) {
+    const Surfel& s = map_[i];
+    if (s.removed() || IsStable(s)) return;
+    const bool fill = s.source != static_cast<uint8_t>(DepthSource::kSensor);
+    const int window = fill ? options_.fill_unstable_frames : options_.unstable_frames;
+    if (frame_ - s.last_frame > window) {
+      map_.Remove(i);
+      ++stats->removed;
+    }
+  };
+  constexpr int kFullSweep = 16;
+  if (frame_ % kFullSweep == 0) {
+    for (size_t i = 0; i < map_.size(); ++i) stale(i);
+  } else {
+    for (const uint32_t i : visible_) stale(i);
+  }
+  KeepWithinBudget(stats);
+  const size_t before = map_.size();
+  map_.Compact();
+  if (map_.size() != before) {  // indices moved: every chunk is new
+    chunks_.assign((map_.size() + kChunk - 1) / kChunk, Chunk());
+  }
+}
+
+void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
+  // Free space: the surfels projected into this frame (those created just now were not) that the
+  // sensor sees through: every measured depth in the 3x3 pixels around theirs lies farther by more
+  // than free_space_margin, and at least five of them are measured.
+  const size_t entries = visible_.size();
+  std::vector<uint8_t> seen_through(entries, 0);
+  const int width = camera_.width, height = camera_.height;
+  const float margin = static_cast<float>(1.0 + options_.free_space_margin);
+  cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
+    for (int e = range.start; e < range.end; ++e) {
+      const int pixel = pixel_of_[e];
+      const Surfel& s = map_[visible_[e]];
+      if (pixel < 0 || s.removed() || s.last_frame == frame_) continue;
+      const int x = pixel % width, y = pixel / width;
+      if (x < 1 || y < 1 || x + 1 >= width || y + 1 >= height) continue;
+      const float z = in_camera_[e].z();
+      int measured = 0;
+      bool behind = true;
+      for (int dy = -1; dy <= 1 && behind; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const float d = m.depth.at<float>(y + dy, x + dx);
+          if (!(d > 0)) continue;
+          ++measured;
+          if (d <= z * margin) {
+            behind = false;
+            break;
+          }
+        }
+      seen_through[e] = behind && measured >= 5;
+    }
+  });
+  for (size_t e = 0; e < entries; ++e) {
+    if (!seen_through[e]) continue;
+    const size_t i = visible_[e];
+    Surfel& s = map_[i];
+    ++stats->contradicted;
+    const bool stable_sensor =
+        s.source == static_cast<uint8_t>(DepthSource::kSensor) && IsStable(s);
+    s.confidence -= static_cast<float>(options_.free_space_penalty);
+    if (!stable_sensor || s.confidence <= 0) {
+      map_.Remove(i);
+      ++stats->removed;
+    }
+  }
+}
+
+void SurfelFusion::MergeRedundant(const Measurement& m, FusionStats* stats) {
+  // Two surfels that project into the same 3x3 pixels of the index map and that association takes
+  // for one surface (depths within free_space_margin of each other, normals within
+  // max_normal_angle_deg), with each centre within the other's disc, are copies of one piece
+  // of surface (passes with slightly different poses leave them); the hidden one is
+  // invisible to association from here on, so keeping both only stacks copies. The less confident
+  // one is merged into the other, by the same confidence-weighted average as a measurement.
+  // Positions are taken now, after this step's merges moved some of them.
+  const size_t entries = visible_.size();
+  std::vector<int32_t> partner(entries, -1);
+  const SE3 camera_from_world = m.world_from_camera.Inverse();
+  const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
+  const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
+  const float margin = static_cast<float>(options_.free_space_margin);
+  const float cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * M_PI / 180.0));
+  const int width = camera_.width, height = camera_.height;
+  cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
+    for (int e = range.start; e < range.end; ++e) {
+      const int pixel = pixel_of_[e];
+      if (pixel < 0) continue;
+      const Surfel& a = map_[visible_[e]];
+      if (a.removed()) continue;
+      const Eigen::Vector3f qa = r * a.position + t;
+      const int x = pixel % width, y = pixel / width;
+      for (int dy = -1; dy <= 1 && partner[e] < 0; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (x + dx < 0 || y + dy < 0 || x + dx >= width || y + dy >= height) continue;
+          const uint64_t packed = index_map_[static_cast<size_t>(y + dy) * width + x + dx];
+          if (packed == kEmpty) continue;
+          const uint32_t w = static_cast<uint32_t>(packed & 0xffffffffu);
+          if (w == static_cast<uint32_t>(e)) continue;
+          const Surfel& b = map_[visible_[w]];
+          if (b.removed() || a.normal.dot(b.normal) < cos_max) continue;
+          const Eigen::Vector3f qb = r * b.position + t;
+          if (!(qb.z() > 0) || std::abs(qa.z() - qb.z()) > margin * qb.z()) continue;
+          // Each centre within the other's disc (closer than the smaller radius across the
+          // ray): denser than any one measurement samples a surface (neighbours on its pixel
+          // grid lie a radius or more apart), so copies of one piece of surface.
+          const Eigen::Vector2f across = qa.head<2>() / qa.z() * qb.z() - qb.head<2>();
+          if (!(across.norm() < std::min(a.radius, b.radius))) continue;
+          partner[e] = static_cast<int32_t>(w);
+          break;
+        }
+    }
+  });
+  for (size_t e = 0; e < entries; ++e) {
+    if (partner[e] < 0) continue;
+    size_t keep = visible_[partner[e]], drop = visible_[e];
+    if (map_[keep].removed() || map_[drop].removed()) continue;  // merged already this step
+    if (map_[drop].confidence > map_[keep].confidence) std::swap(keep, drop);
+    Surfel& k = map_[keep];
+    const Surfel& d = map_[drop];
+    const float c = k.confidence, a = d.confidence, sum = c + a;
+    k.position = (c * k.position + a * d.position) / sum;
+    k.normal = ((c * k.normal + a * d.normal) / sum).normalized();
+    k.radius = std::min(k.radius, d.radius);
+    k.red = static_cast<uint8_t>((c * k.red + a * d.red) / sum + 0.5f);
+    k.green = static_cast<uint8_t>((c * k.green + a * d.green) / sum + 0.5f);
+    k.blue = static_cast<uint8_t>((c * k.blue + a * d.blue) / sum + 0.5f);
+    k.confidence = sum;
+    k.first_frame = std::min(k.first_frame, d.first_frame);
+    if (d.last_frame > k.last_frame) k.last_frame = d.last_frame, k.keyframe = d.keyframe;
+    Touch(keep);
+    map_.Remove(drop);
+    ++stats->redundant;
+    ++stats->removed;
+  }
+}
+
+void SurfelFusion::KeepWithinBudget(FusionStats* stats) {
+  const size_t budget = static_cast<size_t>(options_.max_surfels);
+  if (map_.live() <= budget) return;
+  // Down to 95% of the budget, so that this runs once in many frames: the unstable surfels first
+  // (least confident first), then the stable ones seen longest ago.
+  const size_t excess = map_.live() - budget + budget / 20;
+  std::vector<uint32_t> order;
+  order.reserve(map_.live());
+  for (size_t i = 0; i < map_.size(); ++i)
+    if (!map_[i].removed()) order.push_back(static_cast<uint32_t>(i));
+  auto worse = [&](uint32_t i, uint32_t j) {
+    const Surfel &a = map_[i], &b = map_[j];
+    const bool sa = IsStable(a), sb = IsStable(b);
+    if (sa != sb) return !sa;
+    if (!sa) return a.confidence < b.confidence;
+    return a.last_frame < b.last_frame;
+  };
+  const size_t n = std::min(excess, order.size());
+  std::nth_element(order.begin(), order.begin() + n, order.end(), worse);
+  for (size_t k = 0; k < n; ++k) map_.Remove(order[k]);
+  stats->over_budget += static_cast<int>(n);
+  stats->removed += static_cast<int>(n);
+}
+
+}  // namespace gf
