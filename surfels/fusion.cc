@@ -227,7 +227,7 @@ int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
       const uint32_t e = static_cast<uint32_t>(packed & 0xffffffffu);
       const Eigen::Vector3f& q = in_camera_[e];
       if (std::abs(q.z() - z) * lambda >= k.gap) continue;
-      if (map_[visible_[e]].normal.dot(normal_in_world) < k.cos_max) continue;
+      if (normal_radius_[e].head<3>().dot(normal_in_world) < k.cos_max) continue;
       const float dist = ray.cross(q).squaredNorm();  // |ray x q|^2 orders as the distance
       if (dist < best) {
         best = dist;
@@ -313,6 +313,7 @@ SurfelCounts SurfelFusion::Counts() const {
 size_t SurfelFusion::MemoryBytes() const {
   return map_.surfels().capacity() * sizeof(Surfel) + index_map_.capacity() * sizeof(uint64_t) +
          in_camera_.capacity() * sizeof(Eigen::Vector3f) +
+         normal_radius_.capacity() * sizeof(Eigen::Vector4f) +
          results_.capacity() * sizeof(PixelResult) +
          (pixel_of_.capacity() + visible_.capacity()) * sizeof(int32_t) +
          chunks_.capacity() * sizeof(Chunk);

@@ -166,7 +166,7 @@ class SurfelFusion {
   void ProjectMap(const SE3& camera_from_world);
   void CleanUp(const Measurement& m, FusionStats* stats);
   void RemoveSeenThrough(const Measurement& m, FusionStats* stats);
-  void MergeRedundant(const Measurement& m, FusionStats* stats);
+  void MergeRedundant(FusionStats* stats);
   void KeepWithinBudget(FusionStats* stats);
   void Touch(size_t surfel) { chunks_[surfel / kChunk].dirty = true; }
   bool ChunkVisible(size_t chunk, const SE3& camera_from_world);
@@ -195,6 +195,9 @@ class SurfelFusion {
   // the image), and the projected index map (nearest entry per pixel, packed depth and entry).
   std::vector<uint32_t> visible_;
   std::vector<Eigen::Vector3f> in_camera_;
+  // Per entry, its surfel's world normal and radius (radius < 0: removed when projected), so that
+  // the per-pixel searches read the entries of this step, not the whole map.
+  std::vector<Eigen::Vector4f> normal_radius_;
   std::vector<int32_t> pixel_of_;
   std::vector<uint64_t> index_map_;
   std::vector<PixelResult> results_;  // per measured pixel of the step

@@ -14,7 +14,7 @@
 
 namespace {
 
-constexpr int kFrames = 40;      // read from the capture
+constexpr int kFrames = 40;        // read from the capture
 constexpr int kWarmUpFrames = 30;  // fused before timing: a map in its steady state
 
 struct Capture {

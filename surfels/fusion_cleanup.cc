@@ -7,10 +7,16 @@
 #include "surfels/fusion.h"  // NOLINT: the class's third source file
 
 namespace gf {
+namespace {
+
+float Square(float v) { return v * v; }
+constexpr uint32_t kNone = ~uint32_t{0};  // no surfel
+
+}  // namespace
 
 void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
   RemoveSeenThrough(m, stats);
-  MergeRedundant(m, stats);
+  MergeRedundant(stats);
   // Unstable surfels that nothing confirmed in time: those in view every frame, the whole map
   // every kFullSweep frames (out of view, they cannot be confirmed anyway).
   auto stale = [&](size_t i) {
@@ -83,46 +89,53 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
   }
 }
 
-void SurfelFusion::MergeRedundant(const Measurement& m, FusionStats* stats) {
+void SurfelFusion::MergeRedundant(FusionStats* stats) {
   // Two surfels that project into the same 3x3 pixels of the index map and that association takes
   // for one surface (depths within free_space_margin of each other, normals within
   // max_normal_angle_deg), with each centre within the other's disc, are copies of one piece
   // of surface (passes with slightly different poses leave them); the hidden one is
   // invisible to association from here on, so keeping both only stacks copies. The less confident
   // one is merged into the other, by the same confidence-weighted average as a measurement.
-  // Positions are taken now, after this step's merges moved some of them.
+  // Positions are those projected at the start of this step (its merges move them by a fraction
+  // of the depth margin).
   const size_t entries = visible_.size();
   std::vector<int32_t> partner(entries, -1);
-  const SE3 camera_from_world = m.world_from_camera.Inverse();
-  const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
-  const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
   const float margin = static_cast<float>(options_.free_space_margin);
   const float cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * M_PI / 180.0));
   const int width = camera_.width, height = camera_.height;
+  auto copies = [&](uint32_t e, uint32_t w) {
+    const Eigen::Vector3f &qa = in_camera_[e], &qb = in_camera_[w];
+    if (std::abs(qa.z() - qb.z()) > margin * qb.z()) return false;
+    const Eigen::Vector4f &a = normal_radius_[e], &b = normal_radius_[w];
+    if (a.w() < 0 || b.w() < 0 || a.head<3>().dot(b.head<3>()) < cos_max) return false;
+    // Each centre within the other's disc (closer than the smaller radius across the ray):
+    // denser than any one measurement samples a surface (neighbours on its pixel grid lie a
+    // radius or more apart), so copies of one piece of surface.
+    const Eigen::Vector2f across = qa.head<2>() * (qb.z() / qa.z()) - qb.head<2>();
+    return across.squaredNorm() < Square(std::min(a.w(), b.w()));
+  };
+  auto winner = [&](int x, int y) {
+    const uint64_t packed = index_map_[static_cast<size_t>(y) * width + x];
+    return packed == kEmpty ? kNone : static_cast<uint32_t>(packed & 0xffffffffu);
+  };
   cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
-    for (int e = range.start; e < range.end; ++e) {
+    for (int i = range.start; i < range.end; ++i) {
+      const uint32_t e = static_cast<uint32_t>(i);
       const int pixel = pixel_of_[e];
       if (pixel < 0) continue;
-      const Surfel& a = map_[visible_[e]];
-      if (a.removed()) continue;
-      const Eigen::Vector3f qa = r * a.position + t;
       const int x = pixel % width, y = pixel / width;
+      if (x < 1 || y < 1 || x + 1 >= width || y + 1 >= height) continue;
+      // A hidden surfel against the one that hides it; a pixel's own surfel against those of the
+      // pixels around it (each pair once, from its earlier entry).
+      const uint32_t own = winner(x, y);
+      if (own != e) {
+        if (copies(e, own)) partner[e] = static_cast<int32_t>(own);
+        continue;
+      }
       for (int dy = -1; dy <= 1 && partner[e] < 0; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
-          if (x + dx < 0 || y + dy < 0 || x + dx >= width || y + dy >= height) continue;
-          const uint64_t packed = index_map_[static_cast<size_t>(y + dy) * width + x + dx];
-          if (packed == kEmpty) continue;
-          const uint32_t w = static_cast<uint32_t>(packed & 0xffffffffu);
-          if (w == static_cast<uint32_t>(e)) continue;
-          const Surfel& b = map_[visible_[w]];
-          if (b.removed() || a.normal.dot(b.normal) < cos_max) continue;
-          const Eigen::Vector3f qb = r * b.position + t;
-          if (!(qb.z() > 0) || std::abs(qa.z() - qb.z()) > margin * qb.z()) continue;
-          // Each centre within the other's disc (closer than the smaller radius across the
-          // ray): denser than any one measurement samples a surface (neighbours on its pixel
-          // grid lie a radius or more apart), so copies of one piece of surface.
-          const Eigen::Vector2f across = qa.head<2>() / qa.z() * qb.z() - qb.head<2>();
-          if (!(across.norm() < std::min(a.radius, b.radius))) continue;
+          const uint32_t w = winner(x + dx, y + dy);
+          if (w == kNone || w <= e || !copies(e, w)) continue;
           partner[e] = static_cast<int32_t>(w);
           break;
         }

@@ -69,6 +69,7 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   }
   visible_.resize(entries);
   in_camera_.resize(entries);
+  normal_radius_.resize(entries);
   pixel_of_.assign(entries, -1);
   const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
@@ -90,6 +91,7 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
         const size_t e = offset[c] + (i - first);
         visible_[e] = static_cast<uint32_t>(i);
         const Surfel& s = map_[i];
+        normal_radius_[e] << s.normal, s.removed() ? -1.f : s.radius;
         if (s.removed()) continue;
         const Eigen::Vector3f q = r * s.position + t;
         in_camera_[e] = q;
