@@ -95,7 +95,8 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
   // max_normal_angle_deg), with each centre within the other's disc, are copies of one piece
   // of surface (passes with slightly different poses leave them); the hidden one is
   // invisible to association from here on, so keeping both only stacks copies. The less confident
-  // one is merged into the other, by the same confidence-weighted average as a measurement.
+  // one is merged into the other, by the same confidence-weighted average as a measurement; the
+  // kept surfel keeps its source (a fill that the sensor's copy confirms stays a fill).
   // Positions are those projected at the start of this step (its merges move them by a fraction
   // of the depth margin).
   const size_t entries = visible_.size();
@@ -157,7 +158,10 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
     k.blue = static_cast<uint8_t>((c * k.blue + a * d.blue) / sum + 0.5f);
     k.confidence = sum;
     k.first_frame = std::min(k.first_frame, d.first_frame);
-    if (d.last_frame > k.last_frame) k.last_frame = d.last_frame, k.keyframe = d.keyframe;
+    if (d.last_frame > k.last_frame) {  // it moves with the keyframe that saw it last
+      k.last_frame = d.last_frame;
+      k.keyframe = d.keyframe;
+    }
     Touch(keep);
     map_.Remove(drop);
     ++stats->redundant;
