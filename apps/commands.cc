@@ -94,6 +94,12 @@ void AddSynthCommand(CLI::App& app) {
   cmd->add_option("--frames", *frames, "frames to render: N (or 0:N)")->capture_default_str();
   cmd->add_option("--seed", options->seed, "textures, trajectory and noise")->capture_default_str();
   cmd->add_flag("--loop", options->loop, "trajectory comes back to its start");
+  cmd->add_option("--motion", options->motion,
+                  "orbit (sideways), vertical, diagonal or forward, looking at the scene")
+      ->capture_default_str();
+  cmd->add_option("--degrees-per-frame", options->degrees_per_frame,
+                  "speed: this arc of the orbit per frame (0.6: about 1.6 cm, 0.48 m/s)")
+      ->capture_default_str();
   cmd->add_option("--out", *out, "folder to create")->required();
   cmd->callback([options, out, frames] {
     options->frames = FrameCountOf(*frames, "synth");
@@ -448,8 +454,8 @@ void AddBatchCommand(CLI::App& app) {
   cmd->add_flag("--submit", options->submit, "with --slurm: submit it with sbatch");
   cmd->add_option("--max-running", options->slurm_max_running,
                   "with --slurm: tasks running at once (the array's %K; 0 = no limit)");
-  cmd->add_option("--cpus-per-task", options->slurm_cpus_per_task,
-                  "with --slurm: cores per task")->capture_default_str();
+  cmd->add_option("--cpus-per-task", options->slurm_cpus_per_task, "with --slurm: cores per task")
+      ->capture_default_str();
   cmd->add_option("--mem", options->slurm_memory, "with --slurm: memory per task")
       ->capture_default_str();
   cmd->add_option("--time", options->slurm_time, "with --slurm: time limit per task")
@@ -459,8 +465,7 @@ void AddBatchCommand(CLI::App& app) {
   cmd->callback([options, collect] {
     if (!collect->empty()) {
       const BatchSummary s = CollectBatch(*collect);
-      std::cout << "batch: " << s.BriefReport() << "; " << *collect << "/summary.html"
-                << std::endl;
+      std::cout << "batch: " << s.BriefReport() << "; " << *collect << "/summary.html" << std::endl;
       return;
     }
     if (options->slurm) {
@@ -476,8 +481,8 @@ void AddBatchCommand(CLI::App& app) {
     std::cout << "batch: " << s.BriefReport() << "; " << options->out_dir << "/summary.html"
               << std::endl;
     if (s.failed > 0 && options->task < 0)
-      throw InputError(options->out_dir, std::to_string(s.failed) +
-                                             " captures failed (see summary.html and batch/)");
+      throw InputError(options->out_dir,
+                       std::to_string(s.failed) + " captures failed (see summary.html and batch/)");
   });
 }
 

@@ -74,6 +74,11 @@ bool SynthOptions::Check(std::string* message) const {
     if (message) *message = "unknown scene \"" + scene + "\" (known: glass-table, shelf)";
     return false;
   }
+  if (motion != "orbit" && motion != "vertical" && motion != "diagonal" && motion != "forward") {
+    if (message)
+      *message = "unknown motion \"" + motion + "\" (orbit, vertical, diagonal, forward)";
+    return false;
+  }
   if (frames < 1 || frames > 100000 || !(fps > 0) || !(degrees_per_frame >= 0) ||
       !(jitter_m >= 0)) {
     if (message) *message = "need 1 <= frames <= 100000, fps > 0, speed and jitter >= 0";
@@ -100,16 +105,29 @@ std::vector<SE3> MakeTrajectory(const Scene& scene, const SynthOptions& options)
     }
     return amplitude * sum / 1.83;  // 1 + 1/2 + 1/3
   };
+  // Distance travelled from the middle of the sequence, metres (a sine when looping).
+  const double step_m = scene.orbit_radius() * options.degrees_per_frame * M_PI / 180.0;
+  auto travel = [&](int i) {
+    return options.loop ? step_m * n / (2 * M_PI) * std::sin(2 * M_PI * i / n)
+                        : (i - (n - 1) / 2.0) * step_m;
+  };
+  const bool orbit = options.motion == "orbit", diagonal = options.motion == "diagonal";
   for (int i = 0; i < n; ++i) {
-    const double angle =
-        scene.orbit_center_angle() +
-        (options.loop ? 2 * M_PI * i / n
-                      : (i - (n - 1) / 2.0) * options.degrees_per_frame * M_PI / 180.0);
+    double angle = scene.orbit_center_angle(), height = scene.eye_height();
+    const double radius = scene.orbit_radius();
+    if (orbit && options.loop) {
+      angle += 2 * M_PI * i / n;
+    } else if (orbit || diagonal) {
+      angle += travel(i) / (diagonal ? std::sqrt(2.0) : 1.0) / radius;
+    }
+    if (options.motion == "vertical") height += travel(i);
+    if (diagonal) height += travel(i) / std::sqrt(2.0);
+    Eigen::Vector3d offset(radius * std::cos(angle), radius * std::sin(angle),
+                           height - scene.focus().z());
+    if (options.motion == "forward")  // along the line of sight, never nearer than 0.6 m
+      offset *= std::max(0.6 / offset.norm(), 1.0 - travel(i) / offset.norm());
     const Eigen::Vector3d eye =
-        scene.focus() +
-        Eigen::Vector3d(scene.orbit_radius() * std::cos(angle),
-                        scene.orbit_radius() * std::sin(angle),
-                        scene.eye_height() - scene.focus().z()) +
+        scene.focus() + offset +
         Eigen::Vector3d(wobble(0, i, options.jitter_m), wobble(1, i, options.jitter_m),
                         wobble(2, i, options.jitter_m));
     const Eigen::Vector3d target =

@@ -52,9 +52,13 @@ struct SynthOptions {
   int frames = 60;                    // frames to render
   uint32_t seed = 1;                  // scene textures, trajectory jitter and sensor noise
   bool loop = false;                  // the trajectory comes back to its start
-  double fps = 30.0;                  // timestamps step, frames per second
-  double degrees_per_frame = 0.6;     // orbit speed when not looping (about 1.6 cm/frame)
-  double jitter_m = 0.015;            // handheld wobble of the camera position, metres
+  // How the camera moves, always looking at the scene's focus: "orbit" (sideways around it),
+  // "vertical" (up, or up and down when looping), "diagonal" (both at once), "forward" (towards
+  // it). Every motion covers the same distance per frame.
+  std::string motion = "orbit";
+  double fps = 30.0;               // timestamps step, frames per second
+  double degrees_per_frame = 0.6;  // speed: this arc of the orbit per frame (about 1.6 cm)
+  double jitter_m = 0.015;         // handheld wobble of the camera position, metres
   KinectModelOptions kinect;
   bool Check(std::string* message = nullptr) const;
 };

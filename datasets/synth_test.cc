@@ -154,6 +154,33 @@ TEST(Trajectory, LoopComesBackToItsStart) {
   }
 }
 
+// Each motion moves the camera, seen from its own frame, the way its name says (the handheld
+// wobble off), at the same distance per frame.
+TEST(Trajectory, EachMotionMovesTheCameraAlongItsAxis) {
+  const Scene scene = Scene::Make("glass-table", 3);
+  // The share of the motion along the camera's x (right), y (down) and z (forward) axes.
+  auto share = [&](const std::string& motion) {
+    SynthOptions options;
+    options.frames = 30;
+    options.jitter_m = 0;
+    options.motion = motion;
+    const std::vector<SE3> poses = MakeTrajectory(scene, options);
+    const SE3& a = poses[14];
+    const Eigen::Vector3d step =
+        a.RotationMatrix().transpose() * (poses[15].translation() - a.translation());
+    EXPECT_NEAR(step.norm(), scene.orbit_radius() * 0.6 * M_PI / 180.0, 1e-3) << motion;
+    return Eigen::Vector3d(step.cwiseAbs() / step.norm());
+  };
+  EXPECT_GT(share("orbit").x(), 0.99);
+  EXPECT_GT(share("vertical").y(), 0.9);
+  EXPECT_GT(share("forward").z(), 0.99);
+  const Eigen::Vector3d diagonal = share("diagonal");
+  EXPECT_NEAR(diagonal.x(), diagonal.y(), 0.15);
+  SynthOptions bad;
+  bad.motion = "sideways";
+  EXPECT_FALSE(bad.Check());
+}
+
 std::map<std::string, std::string> ReadAll(const std::string& dir) {
   std::map<std::string, std::string> files;
   for (const auto& e : fs::recursive_directory_iterator(dir)) {
