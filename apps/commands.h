@@ -7,5 +7,7 @@
 namespace gf {
 
 void RegisterCommands(CLI::App& app);
+// `batch` (batch_command.cc), registered by RegisterCommands.
+void AddBatchCommand(CLI::App& app);
 
 }  // namespace gf

@@ -250,13 +250,8 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
       Surfel& s = map_[res.match];
       const float c = s.confidence, a = res.weight, sum = c + a;
       if (res.radius < options_.max_radius_ratio * s.radius) {
-        s.position = (c * s.position + a * p) / sum;
-        s.normal = ((c * s.normal + a * n) / sum).normalized();
+        BlendInto(&s, a, p, n, res.red, res.green, res.blue);
         s.radius = (c * s.radius + a * res.radius) / sum;
-        // Colour channels are in [0, 255], so adding 0.5 rounds them.
-        s.red = static_cast<uint8_t>((c * s.red + a * res.red) / sum + 0.5f);
-        s.green = static_cast<uint8_t>((c * s.green + a * res.green) / sum + 0.5f);
-        s.blue = static_cast<uint8_t>((c * s.blue + a * res.blue) / sum + 0.5f);
       }
       s.confidence = sum;
       s.last_frame = frame_;

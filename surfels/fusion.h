@@ -18,10 +18,10 @@
 //     pixel farther than it by free_space_margin) loses confidence (unstable surfels and fills are
 //     removed); unstable surfels not updated for unstable_frames frames are removed, unconfirmed
 //     fills after fill_unstable_frames;
-//  5. redundant surfels merge: a surfel hidden in the index map behind another that the
-//     association would take for the same surface (same pixel, depth within free_space_margin,
-//     normals within max_normal_angle_deg) is merged into the more confident of the two, so
-//     passes over the same surface do not stack copies of it;
+//  5. copies of a surface merge: two surfels in the same 3x3 index-map pixels that association
+//     would take for one surface (depths within free_space_margin, normals within
+//     max_normal_angle_deg), each centre within the other's disc, are merged into the more
+//     confident of the two, so passes over the same surface do not stack copies of it;
 //  6. the map holds at most max_surfels: beyond it, the least confirmed surfels go (unstable
 //     first, then the stable ones seen longest ago).
 // Radius: sqrt(2) z / f / |n_z|, at most twice the head-on radius. Fills count fill_weight of a

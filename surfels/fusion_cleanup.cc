@@ -149,14 +149,9 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
     if (map_[drop].confidence > map_[keep].confidence) std::swap(keep, drop);
     Surfel& k = map_[keep];
     const Surfel& d = map_[drop];
-    const float c = k.confidence, a = d.confidence, sum = c + a;
-    k.position = (c * k.position + a * d.position) / sum;
-    k.normal = ((c * k.normal + a * d.normal) / sum).normalized();
+    BlendInto(&k, d.confidence, d.position, d.normal, d.red, d.green, d.blue);
     k.radius = std::min(k.radius, d.radius);
-    k.red = static_cast<uint8_t>((c * k.red + a * d.red) / sum + 0.5f);
-    k.green = static_cast<uint8_t>((c * k.green + a * d.green) / sum + 0.5f);
-    k.blue = static_cast<uint8_t>((c * k.blue + a * d.blue) / sum + 0.5f);
-    k.confidence = sum;
+    k.confidence += d.confidence;
     k.first_frame = std::min(k.first_frame, d.first_frame);
     if (d.last_frame > k.last_frame) {  // it moves with the keyframe that saw it last
       k.last_frame = d.last_frame;

@@ -37,6 +37,19 @@ struct Surfel {
 };
 static_assert(sizeof(Surfel) <= 48, "a surfel should stay within 48 bytes");
 
+// Averages a measurement of weight `weight` into s's position, normal and colour, weighted by s's
+// confidence and that weight (s's radius and confidence are the caller's).
+inline void BlendInto(Surfel* s, float weight, const Eigen::Vector3f& position,
+                      const Eigen::Vector3f& normal, uint8_t red, uint8_t green, uint8_t blue) {
+  const float c = s->confidence, sum = c + weight;
+  s->position = (c * s->position + weight * position) / sum;
+  s->normal = ((c * s->normal + weight * normal) / sum).normalized();
+  // Colour channels are in [0, 255], so adding 0.5 rounds them.
+  s->red = static_cast<uint8_t>((c * s->red + weight * red) / sum + 0.5f);
+  s->green = static_cast<uint8_t>((c * s->green + weight * green) / sum + 0.5f);
+  s->blue = static_cast<uint8_t>((c * s->blue + weight * blue) / sum + 0.5f);
+}
+
 class SurfelMap {
  public:
   size_t size() const { return surfels_.size(); }  // including surfels marked removed
