@@ -65,6 +65,7 @@ SurfelFusion::SurfelFusion(const Camera& camera, const FusionOptions& options)
       rays_.at<cv::Vec2f>(y, x) = {static_cast<float>(r.x()), static_cast<float>(r.y())};
     }
   index_map_.assign(static_cast<size_t>(camera.width) * camera.height, kEmpty);
+  front_.resize(index_map_.size());
   // A measurement's weight by its pixel's distance r from the image centre, over the half
   // diagonal: exp(-r^2 / (2 sigma^2)).
   radial_weight_.create(camera.height, camera.width, CV_32FC1);
@@ -222,16 +223,16 @@ int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
   int match = -1;
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx) {
-      const uint64_t packed = index_map_[static_cast<size_t>(y + dy) * camera_.width + x + dx];
-      if (packed == kEmpty) continue;
-      const uint32_t e = static_cast<uint32_t>(packed & 0xffffffffu);
-      const Eigen::Vector3f& q = in_camera_[e];
+      const size_t pixel = static_cast<size_t>(y + dy) * camera_.width + x + dx;
+      if (index_map_[pixel] == kEmpty) continue;
+      const Front& f = front_[pixel];
+      const Eigen::Vector3f& q = f.in_camera;
       if (std::abs(q.z() - z) * lambda >= k.gap) continue;
-      if (normal_radius_[e].head<3>().dot(normal_in_world) < k.cos_max) continue;
+      if (f.normal.dot(normal_in_world) < k.cos_max) continue;
       const float dist = ray.cross(q).squaredNorm();  // |ray x q|^2 orders as the distance
       if (dist < best) {
         best = dist;
-        match = static_cast<int>(visible_[e]);
+        match = static_cast<int>(visible_[f.entry]);
       }
     }
   return match;
@@ -307,6 +308,7 @@ SurfelCounts SurfelFusion::Counts() const {
 
 size_t SurfelFusion::MemoryBytes() const {
   return map_.surfels().capacity() * sizeof(Surfel) + index_map_.capacity() * sizeof(uint64_t) +
+         front_.capacity() * sizeof(Front) +
          in_camera_.capacity() * sizeof(Eigen::Vector3f) +
          normal_radius_.capacity() * sizeof(Eigen::Vector4f) +
          results_.capacity() * sizeof(PixelResult) +

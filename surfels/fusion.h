@@ -200,6 +200,15 @@ class SurfelFusion {
   std::vector<Eigen::Vector4f> normal_radius_;
   std::vector<int32_t> pixel_of_;
   std::vector<uint64_t> index_map_;
+  // Per pixel, its front entry's data (valid where index_map_ is not kEmpty), copied out of the
+  // entry arrays after projection: the per-pixel searches then read memory in pixel order.
+  struct Front {
+    Eigen::Vector3f in_camera;
+    Eigen::Vector3f normal;  // world frame
+    float radius;
+    uint32_t entry;
+  };
+  std::vector<Front> front_;
   std::vector<PixelResult> results_;  // per measured pixel of the step
 };
 

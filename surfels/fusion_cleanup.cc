@@ -1,6 +1,7 @@
 // After a sensor frame: what the sensor contradicts, what nothing confirmed, redundant copies of a
 // surface, and the budget.
 #include <algorithm>
+
 #include <cmath>
 #include <opencv2/core/utility.hpp>
 
@@ -10,7 +11,6 @@ namespace gf {
 namespace {
 
 float Square(float v) { return v * v; }
-constexpr uint32_t kNone = ~uint32_t{0};  // no surfel
 
 }  // namespace
 
@@ -104,43 +104,45 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
   const float margin = static_cast<float>(options_.free_space_margin);
   const float cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * M_PI / 180.0));
   const int width = camera_.width, height = camera_.height;
-  auto copies = [&](uint32_t e, uint32_t w) {
-    const Eigen::Vector3f &qa = in_camera_[e], &qb = in_camera_[w];
+  // a, b: an entry's position in the camera, world normal and radius (< 0: removed).
+  auto copies = [&](const Eigen::Vector3f& qa, const Eigen::Vector3f& na, float ra,
+                    const Eigen::Vector3f& qb, const Eigen::Vector3f& nb, float rb) {
     if (std::abs(qa.z() - qb.z()) > margin * qb.z()) return false;
-    const Eigen::Vector4f &a = normal_radius_[e], &b = normal_radius_[w];
-    if (a.w() < 0 || b.w() < 0 || a.head<3>().dot(b.head<3>()) < cos_max) return false;
+    if (ra < 0 || rb < 0 || na.dot(nb) < cos_max) return false;
     // Each centre within the other's disc (closer than the smaller radius across the ray):
     // denser than any one measurement samples a surface (neighbours on its pixel grid lie a
     // radius or more apart), so copies of one piece of surface.
     const Eigen::Vector2f across = qa.head<2>() * (qb.z() / qa.z()) - qb.head<2>();
-    return across.squaredNorm() < Square(std::min(a.w(), b.w()));
+    return across.squaredNorm() < Square(std::min(ra, rb));
   };
-  auto winner = [&](int x, int y) {
-    const uint64_t packed = index_map_[static_cast<size_t>(y) * width + x];
-    return packed == kEmpty ? kNone : static_cast<uint32_t>(packed & 0xffffffffu);
-  };
+  // A hidden surfel against the one that hides it.
   cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
-    for (int i = range.start; i < range.end; ++i) {
-      const uint32_t e = static_cast<uint32_t>(i);
+    for (int e = range.start; e < range.end; ++e) {
       const int pixel = pixel_of_[e];
       if (pixel < 0) continue;
-      const int x = pixel % width, y = pixel / width;
-      if (x < 1 || y < 1 || x + 1 >= width || y + 1 >= height) continue;
-      // A hidden surfel against the one that hides it; a pixel's own surfel against those of the
-      // pixels around it (each pair once, from its earlier entry).
-      const uint32_t own = winner(x, y);
-      if (own != e) {
-        if (copies(e, own)) partner[e] = static_cast<int32_t>(own);
-        continue;
-      }
-      for (int dy = -1; dy <= 1 && partner[e] < 0; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const uint32_t w = winner(x + dx, y + dy);
-          if (w == kNone || w <= e || !copies(e, w)) continue;
-          partner[e] = static_cast<int32_t>(w);
+      const Front& f = front_[pixel];
+      if (f.entry == static_cast<uint32_t>(e)) continue;
+      const Eigen::Vector4f& a = normal_radius_[e];
+      if (copies(in_camera_[e], a.head<3>(), a.w(), f.in_camera, f.normal, f.radius))
+        partner[e] = static_cast<int32_t>(f.entry);
+    }
+  });
+  // A pixel's front surfel against those of the pixels after it (right, and the three below), so
+  // that each pair of pixels is tested once; in pixel order, as the front data are stored.
+  cv::parallel_for_(cv::Range(1, height - 2), [&](const cv::Range& range) {
+    for (int y = range.start; y < range.end; ++y)
+      for (int x = 1; x + 2 < width; ++x) {
+        const size_t p = static_cast<size_t>(y) * width + x;
+        if (index_map_[p] == kEmpty) continue;
+        const Front& f = front_[p];
+        for (const size_t q : {p + 1, p + width - 1, p + width, p + width + 1}) {
+          if (index_map_[q] == kEmpty) continue;
+          const Front& g = front_[q];
+          if (!copies(f.in_camera, f.normal, f.radius, g.in_camera, g.normal, g.radius)) continue;
+          partner[f.entry] = static_cast<int32_t>(g.entry);
           break;
         }
-    }
+      }
   });
   for (size_t e = 0; e < entries; ++e) {
     if (partner[e] < 0) continue;

@@ -74,7 +74,8 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
   // Depth and entry packed into one 64-bit word, so that the nearest surfel per pixel is an atomic
-  // minimum (projection runs in parallel).
+  // minimum when projection runs in parallel (a plain one on a single thread: a locked
+  // compare-and-swap per surfel costs more than the rest of its projection).
   auto* cells = reinterpret_cast<std::atomic<uint64_t>*>(index_map_.data());
   static_assert(sizeof(std::atomic<uint64_t>) == sizeof(uint64_t), "atomic words");
   const int width = camera_.width, height = camera_.height;
@@ -83,6 +84,7 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   const float k1 = camera_.distortion[0], k2 = camera_.distortion[1], p1 = camera_.distortion[2],
               p2 = camera_.distortion[3], k3 = camera_.distortion[4];
   const float near = static_cast<float>(options_.min_depth_m * 0.5);
+  const bool serial = cv::getNumThreads() <= 1;
   cv::parallel_for_(cv::Range(0, chunks), [&](const cv::Range& range) {
     for (int c = range.start; c < range.end; ++c) {
       if (!in_view[c]) continue;
@@ -108,11 +110,25 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
         const int pixel = y * width + x;
         pixel_of_[e] = pixel;
         const uint64_t packed = Pack(q.z(), static_cast<uint32_t>(e));
+        if (serial) {
+          index_map_[pixel] = std::min(index_map_[pixel], packed);
+          continue;
+        }
         uint64_t old = cells[pixel].load(std::memory_order_relaxed);
         while (packed < old &&
                !cells[pixel].compare_exchange_weak(old, packed, std::memory_order_relaxed)) {
         }
       }
+    }
+  });
+  // Each pixel's front entry, copied into pixel order (front_ is read only where index_map_ is
+  // not empty).
+  cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
+    for (int e = range.start; e < range.end; ++e) {
+      const int pixel = pixel_of_[e];
+      if (pixel < 0 || (index_map_[pixel] & 0xffffffffu) != static_cast<uint32_t>(e)) continue;
+      front_[pixel] = {in_camera_[e], normal_radius_[e].head<3>(), normal_radius_[e].w(),
+                       static_cast<uint32_t>(e)};
     }
   });
 }
