@@ -308,8 +308,7 @@ SurfelCounts SurfelFusion::Counts() const {
 
 size_t SurfelFusion::MemoryBytes() const {
   return map_.surfels().capacity() * sizeof(Surfel) + index_map_.capacity() * sizeof(uint64_t) +
-         front_.capacity() * sizeof(Front) +
-         in_camera_.capacity() * sizeof(Eigen::Vector3f) +
+         front_.capacity() * sizeof(Front) + in_camera_.capacity() * sizeof(Eigen::Vector3f) +
          normal_radius_.capacity() * sizeof(Eigen::Vector4f) +
          results_.capacity() * sizeof(PixelResult) +
          (pixel_of_.capacity() + visible_.capacity()) * sizeof(int32_t) +
@@ -343,12 +342,15 @@ void SurfelFusion::AddSurfels(const std::vector<Surfel>& surfels) {
   chunks_.assign((map_.size() + kChunk - 1) / kChunk, Chunk());
 }
 
-void SurfelMap::Compact(double share) {
-  if (removed_ == 0 || removed_ < share * surfels_.size()) return;
-  surfels_.erase(
-      std::remove_if(surfels_.begin(), surfels_.end(), [](const Surfel& s) { return s.removed(); }),
-      surfels_.end());
+size_t SurfelMap::Compact(double share) {
+  if (removed_ == 0 || removed_ < share * surfels_.size()) return surfels_.size();
+  const auto first =
+      std::find_if(surfels_.begin(), surfels_.end(), [](const Surfel& s) { return s.removed(); });
+  const size_t changed = static_cast<size_t>(first - surfels_.begin());
+  surfels_.erase(std::remove_if(first, surfels_.end(), [](const Surfel& s) { return s.removed(); }),
+                 surfels_.end());
   removed_ = 0;
+  return changed;
 }
 
 }  // namespace gf

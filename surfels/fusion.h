@@ -168,7 +168,11 @@ class SurfelFusion {
   void RemoveSeenThrough(const Measurement& m, FusionStats* stats);
   void MergeRedundant(FusionStats* stats);
   void KeepWithinBudget(FusionStats* stats);
-  void Touch(size_t surfel) { chunks_[surfel / kChunk].dirty = true; }
+  void Touch(size_t surfel) {
+    Chunk& chunk = chunks_[surfel / kChunk];
+    chunk.dirty = true;
+    chunk.settled = false;
+  }
   bool ChunkVisible(size_t chunk, const SE3& camera_from_world);
 
   // Surfels are culled by chunks of kChunk consecutive ones (created together, so close together)
@@ -178,7 +182,8 @@ class SurfelFusion {
   struct Chunk {
     Eigen::Vector3f centre = Eigen::Vector3f::Zero();
     float radius = 0;
-    bool dirty = true;
+    bool dirty = true;     // the bounding sphere must be recomputed
+    bool settled = false;  // no unstable surfel at the last full sweep, and untouched since
   };
   std::vector<Chunk> chunks_;
   float view_x_[2] = {0, 0}, view_y_[2] = {0, 0};  // the image's extent in x/z and y/z

@@ -1,7 +1,6 @@
 // After a sensor frame: what the sensor contradicts, what nothing confirmed, redundant copies of a
 // surface, and the budget.
 #include <algorithm>
-
 #include <cmath>
 #include <opencv2/core/utility.hpp>
 
@@ -31,15 +30,28 @@ void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
   };
   constexpr int kFullSweep = 16;
   if (frame_ % kFullSweep == 0) {
-    for (size_t i = 0; i < map_.size(); ++i) stale(i);
+    // Chunks that held no unstable surfel at their last sweep and changed in no way since are
+    // skipped: a large settled map costs nothing here.
+    chunks_.resize((map_.size() + kChunk - 1) / kChunk);
+    for (size_t c = 0; c < chunks_.size(); ++c) {
+      if (chunks_[c].settled) continue;
+      const size_t end = std::min(map_.size(), (c + 1) * kChunk);
+      bool settled = true;
+      for (size_t i = c * kChunk; i < end; ++i) {
+        stale(i);
+        settled &= map_[i].removed() || IsStable(map_[i]);
+      }
+      chunks_[c].settled = settled;
+    }
   } else {
     for (const uint32_t i : visible_) stale(i);
   }
   KeepWithinBudget(stats);
-  const size_t before = map_.size();
-  map_.Compact();
-  if (map_.size() != before) {  // indices moved: every chunk is new
-    chunks_.assign((map_.size() + kChunk - 1) / kChunk, Chunk());
+  // Compaction moves the surfels after the first removed one: only their chunks are new.
+  const size_t before = map_.size(), changed = map_.Compact();
+  if (changed < before) {
+    chunks_.resize(changed / kChunk);
+    chunks_.resize((map_.size() + kChunk - 1) / kChunk);
   }
 }
 
@@ -82,6 +94,7 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
     const bool stable_sensor =
         s.source == static_cast<uint8_t>(DepthSource::kSensor) && IsStable(s);
     s.confidence -= static_cast<float>(options_.free_space_penalty);
+    Touch(i);  // it may be unstable now
     if (!stable_sensor || s.confidence <= 0) {
       map_.Remove(i);
       ++stats->removed;

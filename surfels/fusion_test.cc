@@ -128,6 +128,28 @@ TEST(SurfelFusion, ACopyOfASurfaceMergesAndASurfaceBehindItStays) {
   EXPECT_EQ(far_wall, static_cast<int>(behind.size()));
 }
 
+// Unstable surfels that left the view go within unstable_frames plus a sweep; the settled map
+// elsewhere stays.
+TEST(SurfelFusion, UnconfirmedSurfelsOutOfViewGo) {
+  const Camera camera = SmallCamera();
+  SurfelFusion fusion(camera, {});
+  for (int i = 0; i < 15; ++i) fusion.FuseFrame(Wall(camera, At(0, 0, 0)), At(0, 0, 0), 0);
+  const size_t settled = fusion.StableSurfels().size();
+  ASSERT_GT(settled, 2000u);
+  fusion.FuseFrame(Wall(camera, At(10, 0, 0)), At(10, 0, 0), 0);  // seen once: unstable
+  auto near_x = [&](float x) {
+    long n = 0;
+    for (const Surfel& s : fusion.map().surfels())
+      n += !s.removed() && std::abs(s.position.x() - x) < 2;
+    return n;
+  };
+  ASSERT_GT(near_x(10), 1000);
+  for (int i = 0; i < FusionOptions().unstable_frames + 20; ++i)
+    fusion.FuseFrame(Wall(camera, At(20, 0, 0)), At(20, 0, 0), 0);
+  EXPECT_EQ(near_x(10), 0);
+  EXPECT_EQ(near_x(0), static_cast<long>(settled));
+}
+
 // A map over its budget drops the least confirmed surfels and keeps fusing.
 TEST(SurfelFusion, TheMapStaysWithinItsBudget) {
   const Camera camera = SmallCamera();

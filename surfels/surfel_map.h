@@ -68,7 +68,8 @@ class SurfelMap {
     }
   }
   // Drops the surfels marked removed when they are more than `share` of the map (keeps order).
-  void Compact(double share = 0.1);
+  // Returns the first index whose surfel changed (size() when none did).
+  size_t Compact(double share = 0.1);
   void Clear() {
     surfels_.clear();
     removed_ = 0;
