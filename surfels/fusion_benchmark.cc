@@ -4,7 +4,7 @@
 // frames, out of view (copies of the frames' stable surfels moved 50 m along x), as a long capture
 // that has built them and scans on elsewhere holds them, so the cost of a large map shows. For
 // instruction counts that do not depend on the machine's load:
-//   valgrind --tool=callgrind build/surfels/surfels_fusion_benchmark --benchmark_min_time=1x
+//   valgrind --tool=callgrind build/surfels/surfels_fusion_benchmark --benchmark_min_time=0.05
 #include <benchmark/benchmark.h>
 
 #include <opencv2/core/utility.hpp>
