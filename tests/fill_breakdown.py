@@ -3,11 +3,13 @@
 as fill-eval.py scores it (good: filled within 3% of the true depth), broken down by what might
 explain a miss: the keyframe's fill path, the geometry of its stereo pair (the partner's direction
 in the keyframe's camera: forward, sideways, vertical, diagonal) and its baseline, the camera's
-speed (from the ground truth), and the pixel's distance to the image edge.
+speed (from the ground truth), the pixel's distance to the image edge, and (for filled pixels) the
+fill's confidence: its good rate per confidence band says how well the confidence predicts error.
 
 Usage: fill_breakdown.py PUNCHED_DIR RUN_DIR
 Reads PUNCHED_DIR/truth/<ts>.png, PUNCHED_DIR/camera.json, PUNCHED_DIR/groundtruth.txt,
-RUN_DIR/keyframes/<ts>.depth_filled.png, RUN_DIR/trajectory.txt and RUN_DIR/report.json.
+RUN_DIR/keyframes/<ts>.depth_filled.png and .fill_confidence.png, RUN_DIR/trajectory.txt and
+RUN_DIR/report.json.
 """
 import collections
 import json
@@ -95,6 +97,15 @@ def main(punched, run):
         for table, key in rows.items():
             tables[table][key] += counts
         tables['all']['all'] += counts
+        # How well the fill's confidence predicts its error: the filled removed pixels by
+        # confidence (keyframes/<ts>.fill_confidence.png, 255 = 1).
+        conf_path = os.path.join(run, 'keyframes', ts + '.fill_confidence.png')
+        if os.path.exists(conf_path):
+            c = cv2.imread(conf_path, cv2.IMREAD_UNCHANGED).astype(np.float64) / 255.0
+            for lo, hi in [(0, 0.25), (0.25, 0.5), (0.5, 0.75), (0.75, 1.01)]:
+                sel = hit & (c >= lo) & (c < hi)
+                tables['fill confidence (filled pixels)'][f'{lo:.2f}-{min(hi, 1):.2f}'] += [
+                    sel.sum(), sel.sum(), (good & sel).sum()]
         # Distance of each removed pixel to the nearest image edge.
         h, w = t.shape
         ys, xs = np.nonzero(removed)
