@@ -103,7 +103,7 @@ void FolderRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& fram
   WriteImage(base + ".depth_filled.png", ToMillimetres(fill.filled_depth));
   if (fill.confidence.type() == CV_32FC1 && fill.fill_mask.type() == CV_8UC1) {
     // The fill's confidence on the filled pixels, 0-255 for 0-1; 0 elsewhere.
-    cv::Mat confidence = cv::Mat::zeros(fill.confidence.size(), CV_8UC1);
+    cv::Mat confidence;
     fill.confidence.convertTo(confidence, CV_8U, 255.0);
     confidence.setTo(0, fill.fill_mask == 0);
     WriteImage(base + ".fill_confidence.png", confidence);

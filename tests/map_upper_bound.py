@@ -100,11 +100,12 @@ def main():
     punched, run, out = sys.argv[1:]
     me = load_map_eval()
     write_ceiling(punched, run, out, me)
+    alignment = full_pose_alignment(punched, run, me)  # the ceiling has the run's trajectory
     for label, folder in (('run', run), ('ceiling', out)):
         print(f'{label}, tool alignment:', flush=True)
         score(punched, folder)
         print(f'{label}, full-pose alignment:', flush=True)
-        score(punched, folder, full_pose_alignment(punched, run, me))
+        score(punched, folder, alignment)
 
 
 if __name__ == '__main__':
