@@ -243,7 +243,11 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
   // Merge and create, one pixel after the other (several pixels may update one surfel).
   const Eigen::Matrix3f r_wc = m.world_from_camera.RotationMatrix().cast<float>();
   const Eigen::Vector3f t_wc = m.world_from_camera.translation().cast<float>();
-  for (const PixelResult& res : results) {
+  // Pixel order is not map order: the surfel kPrefetch pixels ahead is fetched early.
+  for (size_t j = 0; j < results.size(); ++j) {
+    if (j + kPrefetch < results.size() && results[j + kPrefetch].match >= 0)
+      __builtin_prefetch(&map_[results[j + kPrefetch].match], 1);
+    const PixelResult& res = results[j];
     if (!res.valid) continue;
     ++stats->measured;
     const Eigen::Vector3f p = r_wc * res.point + t_wc, n = r_wc * res.normal;
@@ -343,13 +347,13 @@ void SurfelFusion::AddSurfels(const std::vector<Surfel>& surfels) {
 }
 
 size_t SurfelMap::Compact(double share) {
-  if (removed_ == 0 || removed_ < share * surfels_.size()) return surfels_.size();
-  const auto first =
-      std::find_if(surfels_.begin(), surfels_.end(), [](const Surfel& s) { return s.removed(); });
-  const size_t changed = static_cast<size_t>(first - surfels_.begin());
-  surfels_.erase(std::remove_if(first, surfels_.end(), [](const Surfel& s) { return s.removed(); }),
+  if (removed_ == 0 || removed_ < share * (surfels_.size() - first_removed_)) return surfels_.size();
+  const size_t changed = first_removed_;
+  surfels_.erase(std::remove_if(surfels_.begin() + static_cast<std::ptrdiff_t>(changed),
+                                surfels_.end(), [](const Surfel& s) { return s.removed(); }),
                  surfels_.end());
   removed_ = 0;
+  first_removed_ = kNone;
   return changed;
 }
 

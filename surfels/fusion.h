@@ -179,6 +179,9 @@ class SurfelFusion {
   // with a bounding sphere, recomputed when a surfel in the chunk changed.
   static constexpr size_t kChunk = 1024;
   static constexpr uint64_t kEmpty = ~uint64_t{0};  // an index-map pixel no surfel projects to
+  // Loops that read memory at random (the index map in entry order, surfels in pixel order) fetch
+  // the item this many iterations ahead, so that its cache miss overlaps the work in between.
+  static constexpr int kPrefetch = 16;
   struct Chunk {
     Eigen::Vector3f centre = Eigen::Vector3f::Zero();
     float radius = 0;
@@ -200,7 +203,7 @@ class SurfelFusion {
   // the image), and the projected index map (nearest entry per pixel, packed depth and entry).
   std::vector<uint32_t> visible_;
   std::vector<Eigen::Vector3f> in_camera_;
-  // Per entry, its surfel's world normal and radius (radius < 0: removed when projected), so that
+  // Per entry, its surfel's world normal and radius (set where the surfel is not removed), so that
   // the per-pixel searches read the entries of this step, not the whole map.
   std::vector<Eigen::Vector4f> normal_radius_;
   std::vector<int32_t> pixel_of_;

@@ -65,6 +65,10 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
   const float margin = static_cast<float>(1.0 + options_.free_space_margin);
   cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
     for (int e = range.start; e < range.end; ++e) {
+      if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= width) {
+        const float* d = m.depth.ptr<float>() + pixel_of_[e + kPrefetch];
+        __builtin_prefetch(d - width), __builtin_prefetch(d), __builtin_prefetch(d + width);
+      }
       const int pixel = pixel_of_[e];
       const Surfel& s = map_[visible_[e]];
       if (pixel < 0 || s.removed() || s.last_frame == frame_) continue;
@@ -118,10 +122,10 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
   const float cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * M_PI / 180.0));
   const int width = camera_.width, height = camera_.height;
   // a, b: an entry's position in the camera, world normal and radius (< 0: removed).
+  // a, b: an entry's position in the camera, world normal and radius.
   auto copies = [&](const Eigen::Vector3f& qa, const Eigen::Vector3f& na, float ra,
                     const Eigen::Vector3f& qb, const Eigen::Vector3f& nb, float rb) {
-    if (std::abs(qa.z() - qb.z()) > margin * qb.z()) return false;
-    if (ra < 0 || rb < 0 || na.dot(nb) < cos_max) return false;
+    if (std::abs(qa.z() - qb.z()) > margin * qb.z() || na.dot(nb) < cos_max) return false;
     // Each centre within the other's disc (closer than the smaller radius across the ray):
     // denser than any one measurement samples a surface (neighbours on its pixel grid lie a
     // radius or more apart), so copies of one piece of surface.
@@ -131,6 +135,8 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
   // A hidden surfel against the one that hides it.
   cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
     for (int e = range.start; e < range.end; ++e) {
+      if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= 0)
+        __builtin_prefetch(&front_[pixel_of_[e + kPrefetch]]);
       const int pixel = pixel_of_[e];
       if (pixel < 0) continue;
       const Front& f = front_[pixel];

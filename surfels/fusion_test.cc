@@ -233,6 +233,34 @@ TEST(SurfelFusion, TheSyntheticTableFusedWithTruePosesLiesOnItsSurfaces) {
   EXPECT_LT(within_2cm(synth::Material::kDark), 0.3);
 }
 
+TEST(SurfelMap, CompactionCostsNothingForOldSurfelsBeforeTheFirstRemovedOne) {
+  SurfelMap map;
+  for (int i = 0; i < 1000; ++i) {
+    Surfel s;
+    s.confidence = 1;
+    s.first_frame = i;  // identifies it after compaction
+    map.Add(s);
+  }
+  // One removed among the last 20: more than a tenth of the surfels compaction would move.
+  map.Remove(990);
+  EXPECT_EQ(map.Compact(0.1), 990u);
+  ASSERT_EQ(map.size(), 999u);
+  EXPECT_EQ(map[990].first_frame, 991);
+  EXPECT_EQ(map[989].first_frame, 989);
+  // One removed near the start: a tiny share of what would move, so nothing moves yet...
+  map.Remove(10);
+  EXPECT_EQ(map.Compact(0.1), map.size());
+  EXPECT_TRUE(map[10].removed());
+  EXPECT_EQ(map.live(), 998u);
+  // ... until the removed ones are a tenth of it.
+  for (size_t i = 100; i < 200; ++i) map.Remove(i);
+  EXPECT_EQ(map.Compact(0.1), 10u);
+  ASSERT_EQ(map.size(), 898u);
+  EXPECT_EQ(map.live(), 898u);
+  EXPECT_EQ(map[10].first_frame, 11);
+  EXPECT_EQ(map[99].first_frame, 200);
+}
+
 TEST(SurfelPly, RoundTrip) {
   testing::TempDir dir;
   std::vector<Surfel> surfels(3);

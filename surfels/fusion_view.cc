@@ -73,18 +73,13 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   pixel_of_.assign(entries, -1);
   const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
-  // Depth and entry packed into one 64-bit word, so that the nearest surfel per pixel is an atomic
-  // minimum when projection runs in parallel (a plain one on a single thread: a locked
-  // compare-and-swap per surfel costs more than the rest of its projection).
-  auto* cells = reinterpret_cast<std::atomic<uint64_t>*>(index_map_.data());
-  static_assert(sizeof(std::atomic<uint64_t>) == sizeof(uint64_t), "atomic words");
   const int width = camera_.width, height = camera_.height;
   // Camera::ProjectDistorted in float, inlined: this runs for every surfel in view.
   const float fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
   const float k1 = camera_.distortion[0], k2 = camera_.distortion[1], p1 = camera_.distortion[2],
               p2 = camera_.distortion[3], k3 = camera_.distortion[4];
   const float near = static_cast<float>(options_.min_depth_m * 0.5);
-  const bool serial = cv::getNumThreads() <= 1;
+  // Each entry's position in the camera and its pixel, in entry order.
   cv::parallel_for_(cv::Range(0, chunks), [&](const cv::Range& range) {
     for (int c = range.start; c < range.end; ++c) {
       if (!in_view[c]) continue;
@@ -93,8 +88,8 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
         const size_t e = offset[c] + (i - first);
         visible_[e] = static_cast<uint32_t>(i);
         const Surfel& s = map_[i];
-        normal_radius_[e] << s.normal, s.removed() ? -1.f : s.radius;
         if (s.removed()) continue;
+        normal_radius_[e] << s.normal, s.radius;
         const Eigen::Vector3f q = r * s.position + t;
         in_camera_[e] = q;
         if (q.z() < near) continue;
@@ -107,17 +102,32 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
         if (!(u >= -0.5f && v >= -0.5f)) continue;
         const int x = static_cast<int>(u + 0.5f), y = static_cast<int>(v + 0.5f);
         if (x < 0 || y < 0 || x >= width || y >= height) continue;
-        const int pixel = y * width + x;
-        pixel_of_[e] = pixel;
-        const uint64_t packed = Pack(q.z(), static_cast<uint32_t>(e));
-        if (serial) {
-          index_map_[pixel] = std::min(index_map_[pixel], packed);
-          continue;
-        }
-        uint64_t old = cells[pixel].load(std::memory_order_relaxed);
-        while (packed < old &&
-               !cells[pixel].compare_exchange_weak(old, packed, std::memory_order_relaxed)) {
-        }
+        pixel_of_[e] = y * width + x;
+      }
+    }
+  });
+  // The nearest entry per pixel. Map order is not image order, so the index map (larger than a
+  // core's cache) is read at random: the cell kPrefetch entries ahead is fetched early.
+  // Depth and entry are packed into one 64-bit word, so that the nearest is an atomic minimum when
+  // this runs in parallel (a plain one on a single thread: a locked compare-and-swap per surfel
+  // costs more than the rest of its projection).
+  auto* cells = reinterpret_cast<std::atomic<uint64_t>*>(index_map_.data());
+  static_assert(sizeof(std::atomic<uint64_t>) == sizeof(uint64_t), "atomic words");
+  const bool serial = cv::getNumThreads() <= 1;
+  cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
+    for (int e = range.start; e < range.end; ++e) {
+      if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= 0)
+        __builtin_prefetch(&index_map_[pixel_of_[e + kPrefetch]], 1);
+      const int pixel = pixel_of_[e];
+      if (pixel < 0) continue;
+      const uint64_t packed = Pack(in_camera_[e].z(), static_cast<uint32_t>(e));
+      if (serial) {
+        index_map_[pixel] = std::min(index_map_[pixel], packed);
+        continue;
+      }
+      uint64_t old = cells[pixel].load(std::memory_order_relaxed);
+      while (packed < old &&
+             !cells[pixel].compare_exchange_weak(old, packed, std::memory_order_relaxed)) {
       }
     }
   });
@@ -125,6 +135,8 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   // not empty).
   cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
     for (int e = range.start; e < range.end; ++e) {
+      if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= 0)
+        __builtin_prefetch(&index_map_[pixel_of_[e + kPrefetch]]);
       const int pixel = pixel_of_[e];
       if (pixel < 0 || (index_map_[pixel] & 0xffffffffu) != static_cast<uint32_t>(e)) continue;
       front_[pixel] = {in_camera_[e], normal_radius_[e].head<3>(), normal_radius_[e].w(),

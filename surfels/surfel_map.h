@@ -15,6 +15,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -65,19 +66,25 @@ class SurfelMap {
     if (!surfels_[i].removed()) {
       surfels_[i].confidence = -1;
       ++removed_;
+      first_removed_ = std::min(first_removed_, i);
     }
   }
-  // Drops the surfels marked removed when they are more than `share` of the map (keeps order).
-  // Returns the first index whose surfel changed (size() when none did).
+  // Drops the surfels marked removed (keeps order) when they are more than `share` of the surfels
+  // from the first removed one on: those that compaction moves. Its cost is then bounded by
+  // 1 / share moves per removal, however large the map (removals are mostly of recent surfels, at
+  // the end). Returns the first index whose surfel changed (size() when none did).
   size_t Compact(double share = 0.1);
   void Clear() {
     surfels_.clear();
     removed_ = 0;
+    first_removed_ = kNone;
   }
 
  private:
+  static constexpr size_t kNone = ~size_t{0};
   std::vector<Surfel> surfels_;
   size_t removed_ = 0;
+  size_t first_removed_ = kNone;  // the lowest index marked removed (kNone: none)
 };
 
 }  // namespace gf
