@@ -60,9 +60,14 @@ DenseAccumulator AccumulateDense(const DenseLevel& l, int row_begin, int row_end
       ++a.valid;
       const Eigen::Vector3f p = r * Eigen::Vector3f(pv[0], pv[1], pv[2]) + tr;
       if (p.z() <= 0) continue;
-      const int u = static_cast<int>(std::lround(l.cam.fx * p.x() / p.z() + l.cam.cx));
-      const int v = static_cast<int>(std::lround(l.cam.fy * p.y() / p.z() + l.cam.cy));
-      if (u < 0 || v < 0 || u >= l.ref_v.cols || v >= l.ref_v.rows) continue;
+      // The nearest pixel, tested in float before the conversion (which a point far outside
+      // would overflow); truncating x + 0.5 rounds it there (std::lround is a library call per
+      // point on baseline x86-64).
+      const float uf = static_cast<float>(l.cam.fx * p.x() / p.z() + l.cam.cx);
+      const float vf = static_cast<float>(l.cam.fy * p.y() / p.z() + l.cam.cy);
+      if (!(uf >= -0.5f && vf >= -0.5f && uf < l.ref_v.cols - 0.5f && vf < l.ref_v.rows - 0.5f))
+        continue;
+      const int u = static_cast<int>(uf + 0.5f), v = static_cast<int>(vf + 0.5f);
       const cv::Vec3f& qn = l.ref_n.at<cv::Vec3f>(v, u);
       if (std::isnan(qn[0])) continue;
       ++a.overlapping;
