@@ -56,8 +56,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixe
                                    confidence_sigma, stable_confidence, unstable_frames,
                                    fill_weight, fill_stable_confidence, fill_unstable_frames,
                                    free_space_margin, free_space_penalty, max_neighbour_step,
-                                   normal_filter_px, normal_filter_depth_m, normal_baseline_px,
-                                   max_surfels)
+                                   merge_copies_every, normal_filter_px, normal_filter_depth_m,
+                                   normal_baseline_px, max_surfels)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(KeyframeDatabaseOptions, words, vocabulary_keyframes,
                                    kmeans_iterations)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(AlignmentNoise, floor_m, floor_deg, bias)

@@ -34,7 +34,8 @@ bool FusionOptions::Check(std::string* message) const {
     return fail("fusion: the normals' filter needs a positive size and depth scale");
   if (!(free_space_margin >= 0) || !(free_space_penalty >= 0) || !(max_neighbour_step > 0))
     return fail("fusion: free-space margin and penalty >= 0, positive neighbour step");
-  if (max_surfels < 1) return fail("fusion: max_surfels must be positive");
+  if (max_surfels < 1 || merge_copies_every < 1)
+    return fail("fusion: max_surfels and merge_copies_every must be positive");
   return true;
 }
 

@@ -15,7 +15,7 @@ float Square(float v) { return v * v; }
 
 void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
   RemoveSeenThrough(m, stats);
-  MergeRedundant(stats);
+  if (frame_ % options_.merge_copies_every == 0) MergeRedundant(stats);
   // Unstable surfels that nothing confirmed in time: those in view every frame, the whole map
   // every kFullSweep frames (out of view, they cannot be confirmed anyway).
   auto stale = [&](size_t i) {
