@@ -65,7 +65,8 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
   const float margin = static_cast<float>(1.0 + options_.free_space_margin);
   cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
     for (int e = range.start; e < range.end; ++e) {
-      if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= width) {
+      if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= width &&
+          pixel_of_[e + kPrefetch] < (height - 1) * width) {
         const float* d = m.depth.ptr<float>() + pixel_of_[e + kPrefetch];
         __builtin_prefetch(d - width), __builtin_prefetch(d), __builtin_prefetch(d + width);
       }
