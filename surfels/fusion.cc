@@ -348,7 +348,8 @@ void SurfelFusion::AddSurfels(const std::vector<Surfel>& surfels) {
 }
 
 size_t SurfelMap::Compact(double share) {
-  if (removed_ == 0 || removed_ < share * (surfels_.size() - first_removed_)) return surfels_.size();
+  if (removed_ == 0 || removed_ < share * (surfels_.size() - first_removed_))
+    return surfels_.size();
   const size_t changed = first_removed_;
   surfels_.erase(std::remove_if(surfels_.begin() + static_cast<std::ptrdiff_t>(changed),
                                 surfels_.end(), [](const Surfel& s) { return s.removed(); }),

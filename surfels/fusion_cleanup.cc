@@ -122,7 +122,6 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
   const float margin = static_cast<float>(options_.free_space_margin);
   const float cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * M_PI / 180.0));
   const int width = camera_.width, height = camera_.height;
-  // a, b: an entry's position in the camera, world normal and radius (< 0: removed).
   // a, b: an entry's position in the camera, world normal and radius.
   auto copies = [&](const Eigen::Vector3f& qa, const Eigen::Vector3f& na, float ra,
                     const Eigen::Vector3f& qb, const Eigen::Vector3f& nb, float rb) {
