@@ -98,11 +98,15 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
     ++stats->contradicted;
     const bool stable_sensor =
         s.source == static_cast<uint8_t>(DepthSource::kSensor) && IsStable(s);
-    s.confidence -= static_cast<float>(options_.free_space_penalty);
-    Touch(i);  // it may be unstable now
-    if (!stable_sensor || s.confidence <= 0) {
+    const float penalty = static_cast<float>(options_.free_space_penalty);
+    if (!stable_sensor || s.confidence - penalty <= 0) {
+      // Through the map, not by the penalty: a confidence pushed below zero would read as removed
+      // without being counted (nor compacted).
       map_.Remove(i);
       ++stats->removed;
+    } else {
+      s.confidence -= penalty;
+      Touch(i);  // it may be unstable now
     }
   }
 }
