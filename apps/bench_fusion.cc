@@ -41,7 +41,7 @@ json BenchFusion(const std::vector<RgbdFrame>& frames, const Trajectory& tracked
     out["map"]["surfels"] = fusion.map().live();
     out["map"]["stable_surfels"] = fusion.Counts().total_stable();
     out["map"]["memory_bytes"] = fusion.MemoryBytes();
-    built = fusion.map().surfels();
+    built = fusion.map().ToVector();
   }
   // The same frames into a map that already holds about large_map_surfels: copies of the map
   // built above, each moved 50 m further along x (out of every frame's view).

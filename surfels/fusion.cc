@@ -116,7 +116,7 @@ FusionStats SurfelFusion::FuseFill(const RgbdFrame& frame, const cv::Mat& filled
 
 // What stays the same over one measurement's pixels.
 struct SurfelFusion::StepConstants {
-  cv::Mat smooth_half;  // the depth at half size, bilateral-filtered (for normals)
+  const cv::Mat* smooth_half;  // the depth at half size, bilateral-filtered (for normals)
   Eigen::Matrix3f world_from_camera_rotation;  // for the normal test in the world frame
   float cos_max, focal, min_z, max_z, max_step, gap;
   bool has_color;
@@ -140,10 +140,10 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
   // sensor's quantised depth makes neighbour differences too noisy for the normal test (at 3 m a
   // Kinect v1 depth step is about 3 cm). The filter runs on the depth at half size (normals span
   // normal_baseline_px either side); positions come from the measured depth.
-  cv::Mat half;
-  cv::resize(m.depth, half, {}, 0.5, 0.5, cv::INTER_NEAREST);
-  cv::bilateralFilter(half, k.smooth_half, options_.normal_filter_px,
+  cv::resize(m.depth, half_depth_, {}, 0.5, 0.5, cv::INTER_NEAREST);
+  cv::bilateralFilter(half_depth_, smooth_half_, options_.normal_filter_px,
                       options_.normal_filter_depth_m, 0.5 * options_.normal_filter_px);
+  k.smooth_half = &smooth_half_;
   const int grid_cols = (width - m.grid_offset + step - 1) / step;
   const int grid_rows = (height - m.grid_offset + step - 1) / step;
   std::vector<PixelResult>& results = results_;  // kept between steps: no allocation per step
@@ -184,7 +184,7 @@ bool SurfelFusion::MeasurePixel(const Measurement& m, const StepConstants& k, in
     return Eigen::Vector3f(n[0] * depth, n[1] * depth, depth);
   };
   auto smooth_vertex = [&](int u, int v) {
-    const cv::Mat& s = k.smooth_half;
+    const cv::Mat& s = *k.smooth_half;
     return vertex_at(s.at<float>(std::min(v / 2, s.rows - 1), std::min(u / 2, s.cols - 1)), u, v);
   };
   res->point = vertex_at(z, x, y);
@@ -291,14 +291,15 @@ bool SurfelFusion::IsStable(const Surfel& s) const {
 
 std::vector<Surfel> SurfelFusion::StableSurfels() const {
   std::vector<Surfel> out;
-  for (const Surfel& s : map_.surfels())
-    if (IsStable(s)) out.push_back(s);
+  for (size_t i = 0; i < map_.size(); ++i)
+    if (IsStable(map_[i])) out.push_back(map_[i]);
   return out;
 }
 
 SurfelCounts SurfelFusion::Counts() const {
   SurfelCounts c;
-  for (const Surfel& s : map_.surfels()) {
+  for (size_t i = 0; i < map_.size(); ++i) {
+    const Surfel& s = map_[i];
     if (s.removed()) continue;
     const size_t k = std::min<size_t>(s.source, 4);
     if (IsStable(s)) {
@@ -312,11 +313,12 @@ SurfelCounts SurfelFusion::Counts() const {
 }
 
 size_t SurfelFusion::MemoryBytes() const {
-  return map_.surfels().capacity() * sizeof(Surfel) + index_map_.capacity() * sizeof(uint64_t) +
+  return map_.MemoryBytes() + index_map_.capacity() * sizeof(uint64_t) +
          front_.capacity() * sizeof(Front) + in_camera_.capacity() * sizeof(Eigen::Vector3f) +
          normal_radius_.capacity() * sizeof(Eigen::Vector4f) +
          results_.capacity() * sizeof(PixelResult) +
-         (pixel_of_.capacity() + visible_.capacity()) * sizeof(int32_t) +
+         (pixel_of_.capacity() + visible_.capacity() + partner_.capacity()) * sizeof(int32_t) +
+         seen_through_.capacity() +
          chunks_.capacity() * sizeof(Chunk);
 }
 
@@ -329,10 +331,9 @@ void SurfelFusion::MoveWithKeyframes(const std::vector<SE3>& correction) {
     translation.push_back(c.translation().cast<float>());
   }
   const int last = static_cast<int>(correction.size()) - 1;
-  std::vector<Surfel>& surfels = map_.mutable_surfels();
-  cv::parallel_for_(cv::Range(0, static_cast<int>(surfels.size())), [&](const cv::Range& range) {
+  cv::parallel_for_(cv::Range(0, static_cast<int>(map_.size())), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
-      Surfel& s = surfels[i];
+      Surfel& s = map_[i];
       if (s.removed() || s.keyframe < 0) continue;
       const int k = std::min(s.keyframe, last);
       s.position = rotation[k] * s.position + translation[k];
@@ -345,18 +346,6 @@ void SurfelFusion::MoveWithKeyframes(const std::vector<SE3>& correction) {
 void SurfelFusion::AddSurfels(const std::vector<Surfel>& surfels) {
   for (const Surfel& s : surfels) map_.Add(s);
   chunks_.assign((map_.size() + kChunk - 1) / kChunk, Chunk());
-}
-
-size_t SurfelMap::Compact(double share) {
-  if (removed_ == 0 || removed_ < share * (surfels_.size() - first_removed_))
-    return surfels_.size();
-  const size_t changed = first_removed_;
-  surfels_.erase(std::remove_if(surfels_.begin() + static_cast<std::ptrdiff_t>(changed),
-                                surfels_.end(), [](const Surfel& s) { return s.removed(); }),
-                 surfels_.end());
-  removed_ = 0;
-  first_removed_ = kNone;
-  return changed;
 }
 
 }  // namespace gf

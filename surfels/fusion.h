@@ -223,6 +223,11 @@ class SurfelFusion {
   };
   std::vector<Front> front_;
   std::vector<PixelResult> results_;  // per measured pixel of the step
+  // Per step, kept so that a step allocates nothing: the depth at half size and bilateral-filtered
+  // (for normals); per entry, whether the sensor saw through it and the copy it merges into.
+  cv::Mat half_depth_, smooth_half_;
+  std::vector<uint8_t> seen_through_;
+  std::vector<int32_t> partner_;
 };
 
 }  // namespace gf

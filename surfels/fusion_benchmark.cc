@@ -7,6 +7,7 @@
 //   valgrind --tool=callgrind build/surfels/surfels_fusion_benchmark --benchmark_min_time=0.05
 #include <benchmark/benchmark.h>
 
+#include <memory>
 #include <opencv2/core/utility.hpp>
 
 #include "acquisition/frame_source.h"
@@ -15,8 +16,7 @@
 
 namespace {
 
-constexpr int kFrames = 40;        // read from the capture
-constexpr int kWarmUpFrames = 30;  // fused before timing: a map in its steady state
+constexpr int kFrames = 150;  // read from the capture: all of tum_fr1_xyz_head
 
 struct Capture {
   std::vector<gf::RgbdFrame> frames;
@@ -59,28 +59,37 @@ void BM_FuseFrame(benchmark::State& state) {
   }
   const int threads = cv::getNumThreads();
   cv::setNumThreads(static_cast<int>(state.range(0)));
-  gf::SurfelFusion fusion(c.camera, {});
+  std::vector<gf::Surfel> copies;
   if (state.range(1) > 0) {
     // A map that a long capture built before these frames: copies of their stable surfels (a
-    // first fusion of the warm-up frames), out of view, added first as they would have been.
+    // first fusion of all the frames), out of view, added first as they would have been.
     gf::SurfelFusion earlier(c.camera, {});
-    for (int i = 0; i < kWarmUpFrames; ++i) earlier.FuseFrame(c.frames[i], c.poses[i], 0);
+    for (size_t i = 0; i < c.frames.size(); ++i) earlier.FuseFrame(c.frames[i], c.poses[i], 0);
     const std::vector<gf::Surfel> built = earlier.StableSurfels();  // unstable ones would go
-    std::vector<gf::Surfel> copies;
     for (int k = 1; copies.size() < static_cast<size_t>(state.range(1)); ++k)
       for (gf::Surfel s : built) {
         s.position.x() += 50.f * k;
         copies.push_back(s);
       }
-    fusion.AddSurfels(copies);
   }
-  for (int i = 0; i < kWarmUpFrames; ++i) fusion.FuseFrame(c.frames[i], c.poses[i], 0);
-  int i = kWarmUpFrames;
+  // Every frame in turn, from an empty map (plus the copies), as a capture's run fuses them; the
+  // map starts again after the last frame, out of the timing.
+  std::unique_ptr<gf::SurfelFusion> fusion;
+  size_t i = c.frames.size();
+  size_t surfels = 0;
   for (auto _ : state) {
-    fusion.FuseFrame(c.frames[i], c.poses[i], 0);
-    if (++i == kFrames) i = kWarmUpFrames;
+    if (i == c.frames.size()) {
+      state.PauseTiming();
+      fusion = std::make_unique<gf::SurfelFusion>(c.camera, gf::FusionOptions{});
+      fusion->AddSurfels(copies);
+      i = 0;
+      state.ResumeTiming();
+    }
+    fusion->FuseFrame(c.frames[i], c.poses[i], 0);
+    surfels = std::max(surfels, fusion->map().live());
+    ++i;
   }
-  state.counters["surfels"] = static_cast<double>(fusion.map().live());
+  state.counters["surfels"] = static_cast<double>(surfels);
   cv::setNumThreads(threads);
 }
 BENCHMARK(BM_FuseFrame)

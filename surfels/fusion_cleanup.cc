@@ -60,7 +60,8 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
   // sensor sees through: every measured depth in the 3x3 pixels around theirs lies farther by more
   // than free_space_margin, and at least five of them are measured.
   const size_t entries = visible_.size();
-  std::vector<uint8_t> seen_through(entries, 0);
+  std::vector<uint8_t>& seen_through = seen_through_;
+  seen_through.assign(entries, 0);
   const int width = camera_.width, height = camera_.height;
   const float margin = static_cast<float>(1.0 + options_.free_space_margin);
   cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
@@ -122,7 +123,8 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
   // Positions are those projected at the start of this step (its merges move them by a fraction
   // of the depth margin).
   const size_t entries = visible_.size();
-  std::vector<int32_t> partner(entries, -1);
+  std::vector<int32_t>& partner = partner_;
+  partner.assign(entries, -1);
   const float margin = static_cast<float>(options_.free_space_margin);
   const float cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * M_PI / 180.0));
   const int width = camera_.width, height = camera_.height;

@@ -89,7 +89,7 @@ TEST(SurfelFusion, FreeSpaceRemovesWhatTheSensorSeesThrough) {
   fusion.FuseFill(front, front.depth, mask, confidence, DepthSource::kStereo, pose, 0);
   auto fills = [&] {
     long n = 0;
-    for (const Surfel& s : fusion.map().surfels())
+    for (const Surfel& s : fusion.map().ToVector())
       n += !s.removed() && s.source == static_cast<uint8_t>(DepthSource::kStereo);
     return n;
   };
@@ -98,7 +98,7 @@ TEST(SurfelFusion, FreeSpaceRemovesWhatTheSensorSeesThrough) {
   EXPECT_EQ(fills(), 0);
   // The removed fills are counted as removed (compaction relies on the count).
   long live = 0;
-  for (const Surfel& s : fusion.map().surfels()) live += !s.removed();
+  for (const Surfel& s : fusion.map().ToVector()) live += !s.removed();
   EXPECT_EQ(static_cast<long>(fusion.map().live()), live);
 }
 
@@ -143,7 +143,7 @@ TEST(SurfelFusion, UnconfirmedSurfelsOutOfViewGo) {
   fusion.FuseFrame(Wall(camera, At(10, 0, 0)), At(10, 0, 0), 0);  // seen once: unstable
   auto near_x = [&](float x) {
     long n = 0;
-    for (const Surfel& s : fusion.map().surfels())
+    for (const Surfel& s : fusion.map().ToVector())
       n += !s.removed() && std::abs(s.position.x() - x) < 2;
     return n;
   };
@@ -263,6 +263,35 @@ TEST(SurfelMap, CompactionCostsNothingForOldSurfelsBeforeTheFirstRemovedOne) {
   EXPECT_EQ(map.live(), 898u);
   EXPECT_EQ(map[10].first_frame, 11);
   EXPECT_EQ(map[99].first_frame, 200);
+}
+
+TEST(SurfelMap, KeepsOrderAcrossItsBlocksWhenItCompactsAndGrowsAgain) {
+  // 150000 surfels span three storage blocks; every third one from 50000 on is removed.
+  SurfelMap map;
+  for (int i = 0; i < 150000; ++i) {
+    Surfel s;
+    s.confidence = 1;
+    s.first_frame = i;
+    map.Add(s);
+  }
+  for (size_t i = 50000; i < map.size(); i += 3) map.Remove(i);
+  EXPECT_EQ(map.Compact(0.1), 50000u);
+  ASSERT_EQ(map.size(), 150000u - 33334u);
+  EXPECT_EQ(map.live(), map.size());
+  std::vector<int> expected;
+  for (int i = 0; i < 150000; ++i)
+    if (i < 50000 || (i - 50000) % 3 != 0) expected.push_back(i);
+  bool same = true;
+  for (size_t i = 0; i < map.size(); ++i) same &= map[i].first_frame == expected[i];
+  EXPECT_TRUE(same);
+  const size_t bytes = map.MemoryBytes();
+  // It grows again into the blocks it kept, then into a new one.
+  for (int i = 0; i < 100000; ++i) map.Add(map[i]);
+  EXPECT_EQ(map.size(), expected.size() + 100000u);
+  EXPECT_EQ(map[expected.size()].first_frame, 0);
+  EXPECT_EQ(map[map.size() - 1].first_frame, expected[99999]);
+  EXPECT_GT(map.MemoryBytes(), bytes);
+  EXPECT_EQ(map.ToVector().size(), map.size());
 }
 
 TEST(SurfelPly, RoundTrip) {

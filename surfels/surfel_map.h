@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "acquisition/depth.h"
@@ -53,18 +54,25 @@ inline void BlendInto(Surfel* s, float weight, const Eigen::Vector3f& position,
 
 class SurfelMap {
  public:
-  size_t size() const { return surfels_.size(); }  // including surfels marked removed
-  size_t live() const { return surfels_.size() - removed_; }
-  const Surfel& operator[](size_t i) const { return surfels_[i]; }
-  Surfel& operator[](size_t i) { return surfels_[i]; }
-  const std::vector<Surfel>& surfels() const { return surfels_; }
-  // For changes that keep every surfel's index (moving them all).
-  std::vector<Surfel>& mutable_surfels() { return surfels_; }
+  SurfelMap() = default;
+  SurfelMap(const SurfelMap& other) { *this = other; }
+  SurfelMap& operator=(const SurfelMap& other);
+  SurfelMap(SurfelMap&&) noexcept = default;
+  SurfelMap& operator=(SurfelMap&&) noexcept = default;
+  size_t size() const { return size_; }  // including surfels marked removed
+  size_t live() const { return size_ - removed_; }
+  const Surfel& operator[](size_t i) const { return blocks_[i >> kBlockBits][i & kBlockMask]; }
+  Surfel& operator[](size_t i) { return blocks_[i >> kBlockBits][i & kBlockMask]; }
+  // A copy of every surfel (removed ones too), in map order.
+  std::vector<Surfel> ToVector() const;
 
-  void Add(const Surfel& s) { surfels_.push_back(s); }
+  void Add(const Surfel& s) {
+    if (size_ == blocks_.size() * kBlock) blocks_.push_back(std::make_unique<Surfel[]>(kBlock));
+    (*this)[size_++] = s;
+  }
   void Remove(size_t i) {
-    if (!surfels_[i].removed()) {
-      surfels_[i].confidence = -1;
+    if (!(*this)[i].removed()) {
+      (*this)[i].confidence = -1;
       ++removed_;
       first_removed_ = std::min(first_removed_, i);
     }
@@ -74,15 +82,19 @@ class SurfelMap {
   // 1 / share moves per removal, however large the map (removals are mostly of recent surfels, at
   // the end). Returns the first index whose surfel changed (size() when none did).
   size_t Compact(double share = 0.1);
-  void Clear() {
-    surfels_.clear();
-    removed_ = 0;
-    first_removed_ = kNone;
-  }
+  void Clear();
+  // Bytes held (whole blocks).
+  size_t MemoryBytes() const { return blocks_.size() * kBlock * sizeof(Surfel); }
 
  private:
+  // Surfels are stored in blocks of kBlock (3 MB): the map grows a block at a time, so a large map
+  // is never copied to grow (a vector doubling a 1 M-surfel map copies 48 MB and touches twice
+  // that anew) and never needs twice its size while it grows.
+  static constexpr int kBlockBits = 16;
+  static constexpr size_t kBlock = size_t{1} << kBlockBits, kBlockMask = kBlock - 1;
   static constexpr size_t kNone = ~size_t{0};
-  std::vector<Surfel> surfels_;
+  std::vector<std::unique_ptr<Surfel[]>> blocks_;
+  size_t size_ = 0;
   size_t removed_ = 0;
   size_t first_removed_ = kNone;  // the lowest index marked removed (kNone: none)
 };
