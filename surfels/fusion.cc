@@ -150,13 +150,7 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
   results.resize(static_cast<size_t>(grid_cols) * grid_rows);
   cv::parallel_for_(cv::Range(0, grid_rows), [&](const cv::Range& range) {
     for (int gy = range.start; gy < range.end; ++gy)
-      for (int gx = 0; gx < grid_cols; ++gx) {
-        PixelResult& res = results[static_cast<size_t>(gy) * grid_cols + gx];
-        res.valid = false;  // MeasurePixel sets every other field of a valid pixel
-        res.match = -1;
-        const int x = m.grid_offset + gx * step, y = m.grid_offset + gy * step;
-        if (MeasurePixel(m, k, x, y, &res)) res.match = NearestAlongRay(k, x, y, res);
-      }
+      MeasureRow(m, k, m.grid_offset + gy * step, &results[static_cast<size_t>(gy) * grid_cols]);
   });
   Integrate(m, results, &stats);
   if (m.time_step) CleanUp(m, &stats);
@@ -165,77 +159,102 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
   return stats;
 }
 
-bool SurfelFusion::MeasurePixel(const Measurement& m, const StepConstants& k, int x, int y,
-                                PixelResult* res) const {
-  const int width = camera_.width, height = camera_.height;
-  if (y < 1 || y + 1 >= height || x < 1 || x + 1 >= width) return false;
-  if (!m.mask.empty() && !m.mask.at<uint8_t>(y, x)) return false;
-  const float z = m.depth.at<float>(y, x);
-  if (!(z >= k.min_z && z <= k.max_z)) return false;
-  // A normal needs all four neighbours on the same surface.
-  bool neighbours = true;
-  for (const auto& [dx, dy] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
-    const float zn = m.depth.at<float>(y + dy, x + dx);
-    neighbours &= zn > 0 && std::abs(zn - z) <= k.max_step * z;
+void SurfelFusion::MeasureRow(const Measurement& m, const StepConstants& k, int y,
+                              PixelResult* row) const {
+  const int width = camera_.width, height = camera_.height, step = options_.pixel_step;
+  const int grid_cols = (width - m.grid_offset + step - 1) / step;
+  for (int gx = 0; gx < grid_cols; ++gx) {
+    row[gx].valid = false;  // a valid pixel's other fields are all set below
+    row[gx].match = -1;
   }
-  if (!neighbours) return false;
-  auto vertex_at = [&](float depth, int u, int v) -> Eigen::Vector3f {
-    const cv::Vec2f& n = rays_.at<cv::Vec2f>(v, u);
-    return Eigen::Vector3f(n[0] * depth, n[1] * depth, depth);
-  };
-  auto smooth_vertex = [&](int u, int v) {
-    const cv::Mat& s = *k.smooth_half;
-    return vertex_at(s.at<float>(std::min(v / 2, s.rows - 1), std::min(u / 2, s.cols - 1)), u, v);
-  };
-  res->point = vertex_at(z, x, y);
-  const int b = options_.normal_baseline_px;
-  if (x < b || y < b || x + b >= width || y + b >= height) return false;
-  Eigen::Vector3f n = (smooth_vertex(x + b, y) - smooth_vertex(x - b, y))
-                          .cross(smooth_vertex(x, y + b) - smooth_vertex(x, y - b));
-  if (!(n.norm() > 0)) return false;
-  n.normalize();
-  if (n.dot(res->point) > 0) n = -n;  // facing the camera
-  res->normal = n;
-  const float head_on = std::sqrt(2.f) * z / k.focal;
-  res->radius = std::min(2.f * head_on, head_on / std::max(std::abs(n.z()), 1e-3f));
-  const float pixel_weight = m.weight.empty() ? 1.f : m.weight.at<float>(y, x);
-  res->weight = radial_weight_.at<float>(y, x) * pixel_weight * static_cast<float>(m.weight_scale);
-  if (!(res->weight > 0)) return false;
-  if (k.has_color) {
-    const cv::Vec3b c = m.color.at<cv::Vec3b>(y, x);
-    res->red = c[2], res->green = c[1], res->blue = c[0];
-  } else {
-    res->red = res->green = res->blue = 0;
+  // A pixel needs its four neighbours (for the neighbour test) and the pixels normal_baseline_px
+  // away (for its normal) inside the image.
+  const int b = options_.normal_baseline_px, border = std::max(1, b);
+  if (y < border || y + border >= height) return;
+  // Rows and constants as locals: the loop's stores to the results could otherwise alias them.
+  const float *depth = m.depth.ptr<float>(y), *depth_up = m.depth.ptr<float>(y - 1),
+              *depth_down = m.depth.ptr<float>(y + 1);
+  const uint8_t* mask = m.mask.empty() ? nullptr : m.mask.ptr<uint8_t>(y);
+  const float* weight = m.weight.empty() ? nullptr : m.weight.ptr<float>(y);
+  const cv::Vec3b* color = k.has_color ? m.color.ptr<cv::Vec3b>(y) : nullptr;
+  const cv::Vec2f *ray = rays_.ptr<cv::Vec2f>(y), *ray_up = rays_.ptr<cv::Vec2f>(y - b),
+                  *ray_down = rays_.ptr<cv::Vec2f>(y + b);
+  // Normals come from the smoothed depth at half size (the pixel's own ray, that depth).
+  const cv::Mat& smooth = *k.smooth_half;
+  const int last_row = smooth.rows - 1, last_col = smooth.cols - 1;
+  const float *smooth_row = smooth.ptr<float>(std::min(y / 2, last_row)),
+              *smooth_up = smooth.ptr<float>(std::min((y - b) / 2, last_row)),
+              *smooth_down = smooth.ptr<float>(std::min((y + b) / 2, last_row));
+  const float* radial = radial_weight_.ptr<float>(y);
+  const float min_z = k.min_z, max_z = k.max_z, max_step = k.max_step, focal = k.focal;
+  const float weight_scale = static_cast<float>(m.weight_scale);
+  const DepthSource source = m.source;
+  auto vertex = [](const cv::Vec2f& n, float z) { return Eigen::Vector3f(n[0] * z, n[1] * z, z); };
+  for (int gx = 0; gx < grid_cols; ++gx) {
+    const int x = m.grid_offset + gx * step;
+    if (x < border || x + border >= width) continue;
+    if (mask && !mask[x]) continue;
+    const float z = depth[x];
+    if (!(z >= min_z && z <= max_z)) continue;
+    // A normal needs all four neighbours on the same surface.
+    bool neighbours = true;
+    for (const float zn : {depth[x - 1], depth[x + 1], depth_up[x], depth_down[x]})
+      neighbours &= zn > 0 && std::abs(zn - z) <= max_step * z;
+    if (!neighbours) continue;
+    PixelResult& res = row[gx];
+    res.point = vertex(ray[x], z);
+    const Eigen::Vector3f right = vertex(ray[x + b], smooth_row[std::min((x + b) / 2, last_col)]);
+    const Eigen::Vector3f left = vertex(ray[x - b], smooth_row[std::min((x - b) / 2, last_col)]);
+    const Eigen::Vector3f down = vertex(ray_down[x], smooth_down[std::min(x / 2, last_col)]);
+    const Eigen::Vector3f up = vertex(ray_up[x], smooth_up[std::min(x / 2, last_col)]);
+    Eigen::Vector3f n = (right - left).cross(down - up);
+    if (!(n.norm() > 0)) continue;
+    n.normalize();
+    if (n.dot(res.point) > 0) n = -n;  // facing the camera
+    res.normal = n;
+    const float head_on = std::sqrt(2.f) * z / focal;
+    res.radius = std::min(2.f * head_on, head_on / std::max(std::abs(n.z()), 1e-3f));
+    res.weight = radial[x] * (weight ? weight[x] : 1.f) * weight_scale;
+    if (!(res.weight > 0)) continue;
+    if (color) {
+      res.red = color[x][2], res.green = color[x][1], res.blue = color[x][0];
+    } else {
+      res.red = res.green = res.blue = 0;
+    }
+    res.source = source;
+    res.valid = true;
+    res.match = NearestAlongRay(k, x, y, res);
   }
-  res->source = m.source;
-  res->valid = true;
-  return true;
 }
 
 int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
                                   const PixelResult& res) const {
   // The surfel in the 3x3 index-map window nearest the pixel's ray, within the depth gap along it
   // and with a normal within the angle.
-  const float z = res.point.z();
+  const float z = res.point.z(), gap = k.gap, cos_max = k.cos_max;
   const Eigen::Vector3f ray = res.point / z;
   const float lambda = ray.norm();
   const Eigen::Vector3f normal_in_world = k.world_from_camera_rotation * res.normal;
   float best = std::numeric_limits<float>::max();
   int match = -1;
-  for (int dy = -1; dy <= 1; ++dy)
+  const size_t width = camera_.width;
+  for (int dy = -1; dy <= 1; ++dy) {
+    const size_t centre = (y + dy) * width + x;
+    const uint64_t* cells = index_map_.data() + centre;
+    const Front* fronts = front_.data() + centre;
     for (int dx = -1; dx <= 1; ++dx) {
-      const size_t pixel = static_cast<size_t>(y + dy) * camera_.width + x + dx;
-      if (index_map_[pixel] == kEmpty) continue;
-      const Front& f = front_[pixel];
+      if (cells[dx] == kEmpty) continue;
+      const Front& f = fronts[dx];
       const Eigen::Vector3f& q = f.in_camera;
-      if (std::abs(q.z() - z) * lambda >= k.gap) continue;
-      if (f.normal.dot(normal_in_world) < k.cos_max) continue;
+      if (std::abs(q.z() - z) * lambda >= gap) continue;
+      if (f.normal.dot(normal_in_world) < cos_max) continue;
       const float dist = ray.cross(q).squaredNorm();  // |ray x q|^2 orders as the distance
       if (dist < best) {
         best = dist;
         match = static_cast<int>(visible_[f.entry]);
       }
     }
+  }
   return match;
 }
 

@@ -162,9 +162,9 @@ class SurfelFusion {
   };
   struct StepConstants;
   FusionStats Fuse(const Measurement& m);
-  // A measured pixel's vertex, normal, radius, weight and colour (false: not measurable there).
-  bool MeasurePixel(const Measurement& m, const StepConstants& k, int x, int y,
-                    PixelResult* res) const;
+  // The measured pixels of image row y (every pixel_step-th from grid_offset): each one's vertex,
+  // normal, radius, weight, colour and the surfel it associates with (valid false: not measurable).
+  void MeasureRow(const Measurement& m, const StepConstants& k, int y, PixelResult* row) const;
   // The surfel (map index) the measured pixel at (x, y) associates with, -1 none.
   int NearestAlongRay(const StepConstants& k, int x, int y, const PixelResult& res) const;
   void Integrate(const Measurement& m, const std::vector<PixelResult>& results, FusionStats* stats);
@@ -183,6 +183,7 @@ class SurfelFusion {
   // Surfels are culled by chunks of kChunk consecutive ones (created together, so close together)
   // with a bounding sphere, recomputed when a surfel in the chunk changed.
   static constexpr size_t kChunk = 1024;
+  static_assert(SurfelMap::kBlock % kChunk == 0, "a chunk's surfels lie in one block of the map");
   static constexpr uint64_t kEmpty = ~uint64_t{0};  // an index-map pixel no surfel projects to
   // Loops that read memory at random (the index map in entry order, surfels in pixel order) fetch
   // the item this many iterations ahead, so that its cache miss overlaps the work in between.

@@ -241,6 +241,7 @@ TEST(SurfelMap, CompactionCostsNothingForOldSurfelsBeforeTheFirstRemovedOne) {
   SurfelMap map;
   for (int i = 0; i < 1000; ++i) {
     Surfel s;
+    s.position = s.normal = Eigen::Vector3f::Zero();
     s.confidence = 1;
     s.first_frame = i;  // identifies it after compaction
     map.Add(s);
@@ -270,6 +271,7 @@ TEST(SurfelMap, KeepsOrderAcrossItsBlocksWhenItCompactsAndGrowsAgain) {
   SurfelMap map;
   for (int i = 0; i < 150000; ++i) {
     Surfel s;
+    s.position = s.normal = Eigen::Vector3f::Zero();
     s.confidence = 1;
     s.first_frame = i;
     map.Add(s);

@@ -71,27 +71,37 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   in_camera_.resize(entries);
   normal_radius_.resize(entries);
   pixel_of_.assign(entries, -1);
-  const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
-  const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
-  const int width = camera_.width, height = camera_.height;
-  // Camera::ProjectDistorted in float, inlined: this runs for every surfel in view.
-  const float fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
-  const float k1 = camera_.distortion[0], k2 = camera_.distortion[1], p1 = camera_.distortion[2],
-              p2 = camera_.distortion[3], k3 = camera_.distortion[4];
-  const float near = static_cast<float>(options_.min_depth_m * 0.5);
+  const Eigen::Matrix3f rotation = camera_from_world.RotationMatrix().cast<float>();
+  const Eigen::Vector3f translation = camera_from_world.translation().cast<float>();
   // Each entry's position in the camera and its pixel, in entry order.
   cv::parallel_for_(cv::Range(0, chunks), [&](const cv::Range& range) {
+    // Camera::ProjectDistorted in float, inlined: this runs for every surfel in view. Every
+    // constant is a local, and the outputs are written through local pointers: the compiler may
+    // then keep them in registers (stores through the arrays could alias captured references).
+    const Eigen::Matrix3f r = rotation;
+    const Eigen::Vector3f t = translation;
+    const int width = camera_.width, height = camera_.height;
+    const float fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
+    const float k1 = camera_.distortion[0], k2 = camera_.distortion[1],
+                p1 = camera_.distortion[2], p2 = camera_.distortion[3],
+                k3 = camera_.distortion[4];
+    const float near = static_cast<float>(options_.min_depth_m * 0.5);
+    uint32_t* const visible = visible_.data();
+    Eigen::Vector4f* const normal_radius = normal_radius_.data();
+    Eigen::Vector3f* const in_camera = in_camera_.data();
+    int32_t* const pixel_of = pixel_of_.data();
     for (int c = range.start; c < range.end; ++c) {
       if (!in_view[c]) continue;
       const size_t first = c * kChunk, end = std::min(map_.size(), first + kChunk);
+      const Surfel* const chunk = &map_[first];  // a chunk lies within one block of the map
       for (size_t i = first; i < end; ++i) {
         const size_t e = offset[c] + (i - first);
-        visible_[e] = static_cast<uint32_t>(i);
-        const Surfel& s = map_[i];
+        visible[e] = static_cast<uint32_t>(i);
+        const Surfel& s = chunk[i - first];
         if (s.removed()) continue;
-        normal_radius_[e] << s.normal, s.radius;
+        normal_radius[e] << s.normal, s.radius;
         const Eigen::Vector3f q = r * s.position + t;
-        in_camera_[e] = q;
+        in_camera[e] = q;
         if (q.z() < near) continue;
         const float a = q.x() / q.z(), b = q.y() / q.z(), r2 = a * a + b * b;
         const float radial = 1.f + r2 * (k1 + r2 * (k2 + r2 * k3));
@@ -102,7 +112,7 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
         if (!(u >= -0.5f && v >= -0.5f)) continue;
         const int x = static_cast<int>(u + 0.5f), y = static_cast<int>(v + 0.5f);
         if (x < 0 || y < 0 || x >= width || y >= height) continue;
-        pixel_of_[e] = y * width + x;
+        pixel_of[e] = y * width + x;
       }
     }
   });

@@ -54,6 +54,13 @@ inline void BlendInto(Surfel* s, float weight, const Eigen::Vector3f& position,
 
 class SurfelMap {
  public:
+  // Surfels are stored in blocks of kBlock (3 MB): the map grows a block at a time, so a large map
+  // is never copied to grow (a vector doubling a 1 M-surfel map copies 48 MB and touches twice
+  // that anew) and never needs twice its size while it grows. Surfels i and j share a block when
+  // i / kBlock == j / kBlock, and lie one after the other there.
+  static constexpr int kBlockBits = 16;
+  static constexpr size_t kBlock = size_t{1} << kBlockBits, kBlockMask = kBlock - 1;
+
   SurfelMap() = default;
   SurfelMap(const SurfelMap& other) { *this = other; }
   SurfelMap& operator=(const SurfelMap& other);
@@ -87,11 +94,6 @@ class SurfelMap {
   size_t MemoryBytes() const { return blocks_.size() * kBlock * sizeof(Surfel); }
 
  private:
-  // Surfels are stored in blocks of kBlock (3 MB): the map grows a block at a time, so a large map
-  // is never copied to grow (a vector doubling a 1 M-surfel map copies 48 MB and touches twice
-  // that anew) and never needs twice its size while it grows.
-  static constexpr int kBlockBits = 16;
-  static constexpr size_t kBlock = size_t{1} << kBlockBits, kBlockMask = kBlock - 1;
   static constexpr size_t kNone = ~size_t{0};
   std::vector<std::unique_ptr<Surfel[]>> blocks_;
   size_t size_ = 0;
