@@ -243,15 +243,17 @@ int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
     const uint64_t* cells = index_map_.data() + centre;
     const Front* fronts = front_.data() + centre;
     for (int dx = -1; dx <= 1; ++dx) {
-      if (cells[dx] == kEmpty) continue;
+      const uint64_t cell = cells[dx];
+      if (cell == kEmpty) continue;
+      const float qz = CellDepth(cell);
+      if (std::abs(qz - z) * lambda >= gap) continue;
       const Front& f = fronts[dx];
-      const Eigen::Vector3f& q = f.in_camera;
-      if (std::abs(q.z() - z) * lambda >= gap) continue;
       if (f.normal.dot(normal_in_world) < cos_max) continue;
+      const Eigen::Vector3f q(f.x, f.y, qz);
       const float dist = ray.cross(q).squaredNorm();  // |ray x q|^2 orders as the distance
       if (dist < best) {
         best = dist;
-        match = static_cast<int>(visible_[f.entry]);
+        match = static_cast<int>(CellEntry(cell));
       }
     }
   }
@@ -266,13 +268,15 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
   // Pixel order is not map order: the surfel kPrefetch pixels ahead is fetched early.
   for (size_t j = 0; j < results.size(); ++j) {
     if (j + kPrefetch < results.size() && results[j + kPrefetch].match >= 0)
-      __builtin_prefetch(&map_[results[j + kPrefetch].match], 1);
+      __builtin_prefetch(&map_[visible_[results[j + kPrefetch].match]], 1);
     const PixelResult& res = results[j];
     if (!res.valid) continue;
     ++stats->measured;
     const Eigen::Vector3f p = r_wc * res.point + t_wc, n = r_wc * res.normal;
     if (res.match >= 0) {
-      Surfel& s = map_[res.match];
+      const size_t index = visible_[res.match];
+      entry_flags_[res.match] |= kUpdated;
+      Surfel& s = map_[index];
       const float c = s.confidence, a = res.weight, sum = c + a;
       if (res.radius < options_.max_radius_ratio * s.radius) {
         BlendInto(&s, a, p, n, res.red, res.green, res.blue);
@@ -281,7 +285,7 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
       s.confidence = sum;
       s.last_frame = frame_;
       s.keyframe = m.keyframe;
-      Touch(res.match);
+      Touch(index);
       ++stats->merged;
     } else {
       Surfel s;
@@ -337,7 +341,7 @@ size_t SurfelFusion::MemoryBytes() const {
          normal_radius_.capacity() * sizeof(Eigen::Vector4f) +
          results_.capacity() * sizeof(PixelResult) +
          (pixel_of_.capacity() + visible_.capacity() + partner_.capacity()) * sizeof(int32_t) +
-         seen_through_.capacity() +
+         seen_through_.capacity() + entry_flags_.capacity() +
          chunks_.capacity() * sizeof(Chunk);
 }
 

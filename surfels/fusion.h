@@ -41,6 +41,7 @@
 #pragma once
 
 #include <array>
+#include <cstring>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -153,7 +154,7 @@ class SurfelFusion {
   };
   // One measured pixel after association.
   struct PixelResult {
-    int match = -1;  // surfel index, -1 none
+    int match = -1;  // the entry (index into visible_) of the surfel it merges into, -1 none
     bool valid = false;
     Eigen::Vector3f point, normal;  // camera frame
     float radius = 0, weight = 0;
@@ -165,7 +166,8 @@ class SurfelFusion {
   // The measured pixels of image row y (every pixel_step-th from grid_offset): each one's vertex,
   // normal, radius, weight, colour and the surfel it associates with (valid false: not measurable).
   void MeasureRow(const Measurement& m, const StepConstants& k, int y, PixelResult* row) const;
-  // The surfel (map index) the measured pixel at (x, y) associates with, -1 none.
+  // The entry (index into visible_) of the surfel the measured pixel at (x, y) associates with,
+  // -1 none.
   int NearestAlongRay(const StepConstants& k, int x, int y, const PixelResult& res) const;
   void Integrate(const Measurement& m, const std::vector<PixelResult>& results, FusionStats* stats);
   void ProjectMap(const SE3& camera_from_world);
@@ -213,14 +215,29 @@ class SurfelFusion {
   // the per-pixel searches read the entries of this step, not the whole map.
   std::vector<Eigen::Vector4f> normal_radius_;
   std::vector<int32_t> pixel_of_;
+  // Per entry, what the cleanup after a step needs to know without reading the surfel: set when a
+  // pixel merged into it this step (kUpdated), and when it was unstable at projection or lost
+  // confidence to free space since (kUnstable: a candidate for removal when stale).
+  static constexpr uint8_t kUpdated = 1, kUnstable = 2;
+  std::vector<uint8_t> entry_flags_;
   std::vector<uint64_t> index_map_;
-  // Per pixel, its front entry's data (valid where index_map_ is not kEmpty), copied out of the
-  // entry arrays after projection: the per-pixel searches then read memory in pixel order.
+  // The depth and entry an index-map cell packs (the depth's bits above the entry's, so that the
+  // smaller word is the nearer entry).
+  static float CellDepth(uint64_t cell) {
+    const uint32_t bits = static_cast<uint32_t>(cell >> 32);
+    float z;
+    std::memcpy(&z, &bits, sizeof(z));
+    return z;
+  }
+  static uint32_t CellEntry(uint64_t cell) { return static_cast<uint32_t>(cell); }
+  // Per pixel, the rest of its front entry's data (valid where index_map_ is not kEmpty, which
+  // holds its depth and entry), copied out of the entry arrays after projection: the per-pixel
+  // searches then read memory in pixel order. The per-pixel searches stream it (24 bytes a pixel,
+  // 7 MB at 640x480), so it holds nothing the index map has.
   struct Front {
-    Eigen::Vector3f in_camera;
+    float x, y;              // position in the camera (its z: the cell's depth)
     Eigen::Vector3f normal;  // world frame
     float radius;
-    uint32_t entry;
   };
   std::vector<Front> front_;
   std::vector<PixelResult> results_;  // per measured pixel of the step

@@ -44,7 +44,10 @@ void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
       chunks_[c].settled = settled;
     }
   } else {
-    for (const uint32_t i : visible_) stale(i);
+    // Those in view that were unstable at projection, or lost confidence since (the others are
+    // stable: merges only add confidence).
+    for (size_t e = 0; e < visible_.size(); ++e)
+      if (entry_flags_[e] & kUnstable) stale(visible_[e]);
   }
   KeepWithinBudget(stats);
   // Compaction moves the surfels after the first removed one: only their chunks are new.
@@ -71,9 +74,9 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
         const float* d = m.depth.ptr<float>() + pixel_of_[e + kPrefetch];
         __builtin_prefetch(d - width), __builtin_prefetch(d), __builtin_prefetch(d + width);
       }
+      // Not projected (removed, or outside the image), or updated by this frame.
       const int pixel = pixel_of_[e];
-      const Surfel& s = map_[visible_[e]];
-      if (pixel < 0 || s.removed() || s.last_frame == frame_) continue;
+      if (pixel < 0 || (entry_flags_[e] & kUpdated)) continue;
       const int x = pixel % width, y = pixel / width;
       if (x < 1 || y < 1 || x + 1 >= width || y + 1 >= height) continue;
       const float z = in_camera_[e].z();
@@ -107,7 +110,8 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
       ++stats->removed;
     } else {
       s.confidence -= penalty;
-      Touch(i);  // it may be unstable now
+      entry_flags_[e] |= kUnstable;  // it may be unstable now
+      Touch(i);
     }
   }
 }
@@ -141,15 +145,19 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
   // A hidden surfel against the one that hides it.
   cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
     for (int e = range.start; e < range.end; ++e) {
-      if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= 0)
+      if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= 0) {
+        __builtin_prefetch(&index_map_[pixel_of_[e + kPrefetch]]);
         __builtin_prefetch(&front_[pixel_of_[e + kPrefetch]]);
+      }
       const int pixel = pixel_of_[e];
       if (pixel < 0) continue;
+      const uint64_t cell = index_map_[pixel];
+      if (CellEntry(cell) == static_cast<uint32_t>(e)) continue;
       const Front& f = front_[pixel];
-      if (f.entry == static_cast<uint32_t>(e)) continue;
       const Eigen::Vector4f& a = normal_radius_[e];
-      if (copies(in_camera_[e], a.head<3>(), a.w(), f.in_camera, f.normal, f.radius))
-        partner[e] = static_cast<int32_t>(f.entry);
+      if (copies(in_camera_[e], a.head<3>(), a.w(), {f.x, f.y, CellDepth(cell)}, f.normal,
+                 f.radius))
+        partner[e] = static_cast<int32_t>(CellEntry(cell));
     }
   });
   // A pixel's front surfel against those of the pixels after it (right, and the three below), so
@@ -160,11 +168,14 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
         const size_t p = static_cast<size_t>(y) * width + x;
         if (index_map_[p] == kEmpty) continue;
         const Front& f = front_[p];
+        const Eigen::Vector3f qf(f.x, f.y, CellDepth(index_map_[p]));
         for (const size_t q : {p + 1, p + width - 1, p + width, p + width + 1}) {
           if (index_map_[q] == kEmpty) continue;
           const Front& g = front_[q];
-          if (!copies(f.in_camera, f.normal, f.radius, g.in_camera, g.normal, g.radius)) continue;
-          partner[f.entry] = static_cast<int32_t>(g.entry);
+          if (!copies(qf, f.normal, f.radius, {g.x, g.y, CellDepth(index_map_[q])}, g.normal,
+                      g.radius))
+            continue;
+          partner[CellEntry(index_map_[p])] = static_cast<int32_t>(CellEntry(index_map_[q]));
           break;
         }
       }

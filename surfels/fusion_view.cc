@@ -71,6 +71,7 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   in_camera_.resize(entries);
   normal_radius_.resize(entries);
   pixel_of_.assign(entries, -1);
+  entry_flags_.assign(entries, 0);
   const Eigen::Matrix3f rotation = camera_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f translation = camera_from_world.translation().cast<float>();
   // Each entry's position in the camera and its pixel, in entry order.
@@ -86,7 +87,10 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
                 p1 = camera_.distortion[2], p2 = camera_.distortion[3],
                 k3 = camera_.distortion[4];
     const float near = static_cast<float>(options_.min_depth_m * 0.5);
+    const double stable_confidence = options_.stable_confidence,
+                 fill_stable_confidence = options_.fill_stable_confidence;
     uint32_t* const visible = visible_.data();
+    uint8_t* const flags = entry_flags_.data();
     Eigen::Vector4f* const normal_radius = normal_radius_.data();
     Eigen::Vector3f* const in_camera = in_camera_.data();
     int32_t* const pixel_of = pixel_of_.data();
@@ -99,6 +103,11 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
         visible[e] = static_cast<uint32_t>(i);
         const Surfel& s = chunk[i - first];
         if (s.removed()) continue;
+        // IsStable, with the thresholds in locals.
+        const bool stable = s.source == static_cast<uint8_t>(DepthSource::kSensor)
+                                ? s.confidence >= stable_confidence
+                                : s.confidence >= fill_stable_confidence;
+        if (!stable) flags[e] = kUnstable;
         normal_radius[e] << s.normal, s.radius;
         const Eigen::Vector3f q = r * s.position + t;
         in_camera[e] = q;
@@ -148,9 +157,9 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
       if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= 0)
         __builtin_prefetch(&index_map_[pixel_of_[e + kPrefetch]]);
       const int pixel = pixel_of_[e];
-      if (pixel < 0 || (index_map_[pixel] & 0xffffffffu) != static_cast<uint32_t>(e)) continue;
-      front_[pixel] = {in_camera_[e], normal_radius_[e].head<3>(), normal_radius_[e].w(),
-                       static_cast<uint32_t>(e)};
+      if (pixel < 0 || CellEntry(index_map_[pixel]) != static_cast<uint32_t>(e)) continue;
+      front_[pixel] = {in_camera_[e].x(), in_camera_[e].y(), normal_radius_[e].head<3>(),
+                       normal_radius_[e].w()};
     }
   });
 }
