@@ -170,10 +170,17 @@ class SurfelFusion {
   // -1 none.
   int NearestAlongRay(const StepConstants& k, int x, int y, const PixelResult& res) const;
   void Integrate(const Measurement& m, const std::vector<PixelResult>& results, FusionStats* stats);
+  // The entries of this step (the surfels of the chunks in view) and the index map: culling, then
+  // ProjectEntries (each entry's position in the camera and its pixel), then NearestPerPixel (the
+  // nearest entry per pixel and its front data).
   void ProjectMap(const SE3& camera_from_world);
+  void ProjectEntries(const SE3& camera_from_world);
+  void NearestPerPixel();
   void CleanUp(const Measurement& m, FusionStats* stats);
   void RemoveSeenThrough(const Measurement& m, FusionStats* stats);
   void MergeRedundant(FusionStats* stats);
+  // Sets partner_[e] to the entry that entry e is a copy of (-1: none), for MergeRedundant.
+  void FindCopies();
   void KeepWithinBudget(FusionStats* stats);
   void Touch(size_t surfel) {
     Chunk& chunk = chunks_[surfel / kChunk];
@@ -197,6 +204,8 @@ class SurfelFusion {
     bool settled = false;  // no unstable surfel at the last full sweep, and untouched since
   };
   std::vector<Chunk> chunks_;
+  std::vector<uint8_t> in_view_;      // per chunk, in view this step
+  std::vector<size_t> entry_offset_;  // per chunk in view, its first entry
   float view_x_[2] = {0, 0}, view_y_[2] = {0, 0};  // the image's extent in x/z and y/z
 
   Camera camera_;
@@ -241,8 +250,9 @@ class SurfelFusion {
   };
   std::vector<Front> front_;
   std::vector<PixelResult> results_;  // per measured pixel of the step
-  // Per step, kept so that a step allocates nothing: the depth at half size and bilateral-filtered
-  // (for normals); per entry, whether the sensor saw through it and the copy it merges into.
+  // Per step, kept between steps (a step allocates only while the map grows, and in the rare
+  // budget pass): the depth at half size and bilateral-filtered (for normals); per entry, whether
+  // the sensor saw through it and the copy it merges into.
   cv::Mat half_depth_, smooth_half_;
   std::vector<uint8_t> seen_through_;
   std::vector<int32_t> partner_;

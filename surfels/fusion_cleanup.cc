@@ -126,6 +126,31 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
   // kept surfel keeps its source (a fill that the sensor's copy confirms stays a fill).
   // Positions are those projected at the start of this step (its merges move them by a fraction
   // of the depth margin).
+  FindCopies();
+  const std::vector<int32_t>& partner = partner_;
+  for (size_t e = 0; e < partner.size(); ++e) {
+    if (partner[e] < 0) continue;
+    size_t keep = visible_[partner[e]], drop = visible_[e];
+    if (map_[keep].removed() || map_[drop].removed()) continue;  // merged already this step
+    if (map_[drop].confidence > map_[keep].confidence) std::swap(keep, drop);
+    Surfel& k = map_[keep];
+    const Surfel& d = map_[drop];
+    BlendInto(&k, d.confidence, d.position, d.normal, d.red, d.green, d.blue);
+    k.radius = std::min(k.radius, d.radius);
+    k.confidence += d.confidence;
+    k.first_frame = std::min(k.first_frame, d.first_frame);
+    if (d.last_frame > k.last_frame) {  // it moves with the keyframe that saw it last
+      k.last_frame = d.last_frame;
+      k.keyframe = d.keyframe;
+    }
+    Touch(keep);
+    map_.Remove(drop);
+    ++stats->redundant;
+    ++stats->removed;
+  }
+}
+
+void SurfelFusion::FindCopies() {
   const size_t entries = visible_.size();
   std::vector<int32_t>& partner = partner_;
   partner.assign(entries, -1);
@@ -180,26 +205,6 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
         }
       }
   });
-  for (size_t e = 0; e < entries; ++e) {
-    if (partner[e] < 0) continue;
-    size_t keep = visible_[partner[e]], drop = visible_[e];
-    if (map_[keep].removed() || map_[drop].removed()) continue;  // merged already this step
-    if (map_[drop].confidence > map_[keep].confidence) std::swap(keep, drop);
-    Surfel& k = map_[keep];
-    const Surfel& d = map_[drop];
-    BlendInto(&k, d.confidence, d.position, d.normal, d.red, d.green, d.blue);
-    k.radius = std::min(k.radius, d.radius);
-    k.confidence += d.confidence;
-    k.first_frame = std::min(k.first_frame, d.first_frame);
-    if (d.last_frame > k.last_frame) {  // it moves with the keyframe that saw it last
-      k.last_frame = d.last_frame;
-      k.keyframe = d.keyframe;
-    }
-    Touch(keep);
-    map_.Remove(drop);
-    ++stats->redundant;
-    ++stats->removed;
-  }
 }
 
 void SurfelFusion::KeepWithinBudget(FusionStats* stats) {

@@ -154,6 +154,80 @@ TEST(SurfelFusion, UnconfirmedSurfelsOutOfViewGo) {
   EXPECT_EQ(near_x(0), static_cast<long>(settled));
 }
 
+// Unstable surfels in view that nothing confirms go after unstable_frames, at the first frame
+// after it, not at the next sweep of the whole map (every 16 frames).
+TEST(SurfelFusion, UnconfirmedSurfelsInViewGoWithoutWaitingForASweep) {
+  const Camera camera = SmallCamera();
+  const FusionOptions options;
+  SurfelFusion fusion(camera, options);
+  const SE3 pose = At(0, 0, 0);
+  fusion.FuseFrame(Wall(camera, pose), pose, 0);  // frame 1: seen once, unstable
+  const size_t seen_once = fusion.map().live();
+  ASSERT_GT(seen_once, 1000u);
+  ASSERT_TRUE(fusion.StableSurfels().empty());
+  RgbdFrame nothing = Wall(camera, pose);  // no depth: in view, neither confirmed nor contradicted
+  nothing.depth.setTo(0);
+  while (fusion.frames() < 1 + options.unstable_frames) fusion.FuseFrame(nothing, pose, 0);
+  EXPECT_EQ(fusion.map().live(), seen_once);  // not stale yet
+  fusion.FuseFrame(nothing, pose, 0);
+  ASSERT_NE(fusion.frames() % 16, 0) << "the test must end between two sweeps";
+  EXPECT_EQ(fusion.map().live(), 0u);
+}
+
+// A stable surfel that free space pushes below the stable confidence is unstable from that step
+// on: if nothing confirmed it for unstable_frames, it goes in that same step.
+TEST(SurfelFusion, ASurfelMadeUnstableByFreeSpaceGoesWhenStale) {
+  const Camera camera = SmallCamera();
+  const FusionOptions options;
+  SurfelFusion fusion(camera, options);
+  const SE3 pose = At(0, 0, 0);
+  for (int i = 0; i < 20; ++i) fusion.FuseFrame(Wall(camera, pose), pose, 0);
+  const size_t stable = fusion.StableSurfels().size();
+  ASSERT_GT(stable, 2000u);
+  RgbdFrame nothing = Wall(camera, pose);
+  nothing.depth.setTo(0);
+  for (int i = 0; i <= options.unstable_frames; ++i) fusion.FuseFrame(nothing, pose, 0);
+  // Stable ones stay however long unseen (a few merge as copies of their neighbours).
+  ASSERT_GT(fusion.StableSurfels().size(), stable * 9 / 10);
+  // The sensor now sees 30 cm past the wall, every frame: each stable surfel loses confidence
+  // until it is unstable, and none stays as a stale unstable one after any step.
+  for (int i = 0; i < 12; ++i) {
+    fusion.FuseFrame(Wall(camera, pose, 1.8f), pose, 0);
+    long stale = 0;
+    for (const Surfel& s : fusion.map().ToVector())
+      stale += !s.removed() && !fusion.IsStable(s) &&
+               fusion.frames() - s.last_frame > options.unstable_frames;
+    ASSERT_EQ(stale, 0) << "after contradiction " << i;
+  }
+  // The contradicted wall is (almost) gone: what is left of it lies on the image's border, where
+  // the free-space test has no 3x3 window.
+  long wall = 0;
+  for (const Surfel& s : fusion.map().ToVector())
+    wall += !s.removed() && std::abs(s.position.z() - 1.5f) < 0.01f;
+  EXPECT_LT(wall, static_cast<long>(stable) / 10);
+}
+
+// A map moved from is empty and usable; a removed surfel added to a map counts as removed.
+TEST(SurfelMap, AMovedFromMapIsEmptyAndRemovedSurfelsAddedCount) {
+  SurfelMap map;
+  Surfel s;
+  s.position = s.normal = Eigen::Vector3f::Zero();
+  s.confidence = 1;
+  for (int i = 0; i < 10; ++i) map.Add(s);
+  map.Remove(3);
+  SurfelMap moved = std::move(map);
+  EXPECT_EQ(moved.size(), 10u);
+  EXPECT_EQ(moved.live(), 9u);
+  EXPECT_EQ(map.size(), 0u);  // NOLINT(bugprone-use-after-move): defined as empty
+  map.Add(s);
+  EXPECT_EQ(map.live(), 1u);
+  SurfelMap copy;
+  for (const Surfel& t : moved.ToVector()) copy.Add(t);
+  EXPECT_EQ(copy.live(), 9u);
+  EXPECT_EQ(copy.Compact(0.1), 3u);
+  EXPECT_EQ(copy.size(), 9u);
+}
+
 // A map over its budget drops the least confirmed surfels and keeps fusing.
 TEST(SurfelFusion, TheMapStaysWithinItsBudget) {
   const Camera camera = SmallCamera();

@@ -57,14 +57,15 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   const int chunks = static_cast<int>(chunks_.size());
   // The chunks in view, and where each one's entries start (entries: the surfels of the chunks
   // in view, in map order; the per-surfel work of this step runs over them only).
-  std::vector<uint8_t> in_view(chunks);
+  std::vector<uint8_t>& in_view = in_view_;
+  in_view.resize(chunks);
   cv::parallel_for_(cv::Range(0, chunks), [&](const cv::Range& range) {
     for (int c = range.start; c < range.end; ++c) in_view[c] = ChunkVisible(c, camera_from_world);
   });
-  std::vector<size_t> offset(chunks);
+  entry_offset_.resize(chunks);
   size_t entries = 0;
   for (int c = 0; c < chunks; ++c) {
-    offset[c] = entries;
+    entry_offset_[c] = entries;
     if (in_view[c]) entries += std::min(map_.size(), (c + 1) * kChunk) - c * kChunk;
   }
   visible_.resize(entries);
@@ -72,6 +73,14 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   normal_radius_.resize(entries);
   pixel_of_.assign(entries, -1);
   entry_flags_.assign(entries, 0);
+  ProjectEntries(camera_from_world);
+  NearestPerPixel();
+}
+
+void SurfelFusion::ProjectEntries(const SE3& camera_from_world) {
+  const int chunks = static_cast<int>(chunks_.size());
+  const std::vector<uint8_t>& in_view = in_view_;
+  const std::vector<size_t>& offset = entry_offset_;
   const Eigen::Matrix3f rotation = camera_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f translation = camera_from_world.translation().cast<float>();
   // Each entry's position in the camera and its pixel, in entry order.
@@ -118,13 +127,19 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
         const float v = fy * (b * radial + p1 * (r2 + 2.f * b * b) + 2.f * p2 * a * b) + cy;
         // Nearest pixel (truncating u + 0.5 rounds it for u >= -0.5; std::lround and std::floor
         // are library calls on baseline x86-64, and this loop runs per surfel in view).
-        if (!(u >= -0.5f && v >= -0.5f)) continue;
+        // The upper bounds keep the conversion defined (a surfel near the camera and far outside
+        // the view can land anywhere); the pixel test after it catches u + 0.5 rounding up.
+        if (!(u >= -0.5f && v >= -0.5f && u < width - 0.5f && v < height - 0.5f)) continue;
         const int x = static_cast<int>(u + 0.5f), y = static_cast<int>(v + 0.5f);
         if (x < 0 || y < 0 || x >= width || y >= height) continue;
         pixel_of[e] = y * width + x;
       }
     }
   });
+}
+
+void SurfelFusion::NearestPerPixel() {
+  const int entries = static_cast<int>(visible_.size());
   // The nearest entry per pixel. Map order is not image order, so the index map (larger than a
   // core's cache) is read at random: the cell kPrefetch entries ahead is fetched early.
   // Depth and entry are packed into one 64-bit word, so that the nearest is an atomic minimum when
@@ -133,7 +148,7 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   auto* cells = reinterpret_cast<std::atomic<uint64_t>*>(index_map_.data());
   static_assert(sizeof(std::atomic<uint64_t>) == sizeof(uint64_t), "atomic words");
   const bool serial = cv::getNumThreads() <= 1;
-  cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
+  cv::parallel_for_(cv::Range(0, entries), [&](const cv::Range& range) {
     for (int e = range.start; e < range.end; ++e) {
       if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= 0)
         __builtin_prefetch(&index_map_[pixel_of_[e + kPrefetch]], 1);
@@ -152,7 +167,7 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   });
   // Each pixel's front entry, copied into pixel order (front_ is read only where index_map_ is
   // not empty).
-  cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
+  cv::parallel_for_(cv::Range(0, entries), [&](const cv::Range& range) {
     for (int e = range.start; e < range.end; ++e) {
       if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= 0)
         __builtin_prefetch(&index_map_[pixel_of_[e + kPrefetch]]);
@@ -182,7 +197,11 @@ cv::Mat SurfelFusion::RenderDepth(const SE3& world_from_camera) {
       if (q.z() < options_.min_depth_m) continue;
       const float n_dot_q = n.dot(q);
       const Eigen::Vector2d uv = camera_.ProjectDistorted(q.cast<double>());
-      if (!(uv.x() >= -0.5 && uv.y() >= -0.5)) continue;
+      // Beyond the image by more than a splat, it draws nothing (and the conversion below stays
+      // defined).
+      if (!(uv.x() >= -0.5 && uv.y() >= -0.5 && uv.x() < camera_.width + kMaxSplat &&
+            uv.y() < camera_.height + kMaxSplat))
+        continue;
       const int x0 = static_cast<int>(uv.x() + 0.5), y0 = static_cast<int>(uv.y() + 0.5);
       const int radius = std::min(kMaxSplat, static_cast<int>(s.radius * focal / q.z()));
       for (int y = std::max(0, y0 - radius); y <= std::min(camera_.height - 1, y0 + radius); ++y)

@@ -5,9 +5,7 @@ namespace gf {
 SurfelMap& SurfelMap::operator=(const SurfelMap& other) {
   if (this == &other) return *this;
   Clear();
-  for (size_t i = 0; i < other.size_; ++i) Add(other[i]);
-  removed_ = other.removed_;
-  first_removed_ = other.first_removed_;
+  for (size_t i = 0; i < other.size_; ++i) Add(other[i]);  // counts the removed ones
   return *this;
 }
 

@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "acquisition/depth.h"
@@ -64,8 +65,16 @@ class SurfelMap {
   SurfelMap() = default;
   SurfelMap(const SurfelMap& other) { *this = other; }
   SurfelMap& operator=(const SurfelMap& other);
-  SurfelMap(SurfelMap&&) noexcept = default;
-  SurfelMap& operator=(SurfelMap&&) noexcept = default;
+  // A map moved from is empty.
+  SurfelMap(SurfelMap&& other) noexcept { *this = std::move(other); }
+  SurfelMap& operator=(SurfelMap&& other) noexcept {
+    blocks_ = std::move(other.blocks_);
+    other.blocks_.clear();
+    size_ = std::exchange(other.size_, 0);
+    removed_ = std::exchange(other.removed_, 0);
+    first_removed_ = std::exchange(other.first_removed_, kNone);
+    return *this;
+  }
   size_t size() const { return size_; }  // including surfels marked removed
   size_t live() const { return size_ - removed_; }
   const Surfel& operator[](size_t i) const { return blocks_[i >> kBlockBits][i & kBlockMask]; }
@@ -73,8 +82,13 @@ class SurfelMap {
   // A copy of every surfel (removed ones too), in map order.
   std::vector<Surfel> ToVector() const;
 
+  // Adds s at the end (one marked removed counts as removed, as Remove would count it).
   void Add(const Surfel& s) {
     if (size_ == blocks_.size() * kBlock) blocks_.push_back(std::make_unique<Surfel[]>(kBlock));
+    if (s.removed()) {
+      ++removed_;
+      first_removed_ = std::min(first_removed_, size_);
+    }
     (*this)[size_++] = s;
   }
   void Remove(size_t i) {
