@@ -207,27 +207,6 @@ TEST(SurfelFusion, ASurfelMadeUnstableByFreeSpaceGoesWhenStale) {
   EXPECT_LT(wall, static_cast<long>(stable) / 10);
 }
 
-// A map moved from is empty and usable; a removed surfel added to a map counts as removed.
-TEST(SurfelMap, AMovedFromMapIsEmptyAndRemovedSurfelsAddedCount) {
-  SurfelMap map;
-  Surfel s;
-  s.position = s.normal = Eigen::Vector3f::Zero();
-  s.confidence = 1;
-  for (int i = 0; i < 10; ++i) map.Add(s);
-  map.Remove(3);
-  SurfelMap moved = std::move(map);
-  EXPECT_EQ(moved.size(), 10u);
-  EXPECT_EQ(moved.live(), 9u);
-  EXPECT_EQ(map.size(), 0u);  // NOLINT(bugprone-use-after-move): defined as empty
-  map.Add(s);
-  EXPECT_EQ(map.live(), 1u);
-  SurfelMap copy;
-  for (const Surfel& t : moved.ToVector()) copy.Add(t);
-  EXPECT_EQ(copy.live(), 9u);
-  EXPECT_EQ(copy.Compact(0.1), 3u);
-  EXPECT_EQ(copy.size(), 9u);
-}
-
 // A map over its budget drops the least confirmed surfels and keeps fusing.
 TEST(SurfelFusion, TheMapStaysWithinItsBudget) {
   const Camera camera = SmallCamera();
@@ -311,15 +290,21 @@ TEST(SurfelFusion, TheSyntheticTableFusedWithTruePosesLiesOnItsSurfaces) {
   EXPECT_LT(within_2cm(synth::Material::kDark), 0.3);
 }
 
-TEST(SurfelMap, CompactionCostsNothingForOldSurfelsBeforeTheFirstRemovedOne) {
+// n live surfels, each with first_frame its index (which identifies it after compaction).
+SurfelMap NumberedMap(int n) {
   SurfelMap map;
-  for (int i = 0; i < 1000; ++i) {
+  for (int i = 0; i < n; ++i) {
     Surfel s;
     s.position = s.normal = Eigen::Vector3f::Zero();
     s.confidence = 1;
-    s.first_frame = i;  // identifies it after compaction
+    s.first_frame = i;
     map.Add(s);
   }
+  return map;
+}
+
+TEST(SurfelMap, CompactionCostsNothingForOldSurfelsBeforeTheFirstRemovedOne) {
+  SurfelMap map = NumberedMap(1000);
   // One removed among the last 20: more than a tenth of the surfels compaction would move.
   map.Remove(990);
   EXPECT_EQ(map.Compact(0.1), 990u);
@@ -342,14 +327,7 @@ TEST(SurfelMap, CompactionCostsNothingForOldSurfelsBeforeTheFirstRemovedOne) {
 
 TEST(SurfelMap, KeepsOrderAcrossItsBlocksWhenItCompactsAndGrowsAgain) {
   // 150000 surfels span three storage blocks; every third one from 50000 on is removed.
-  SurfelMap map;
-  for (int i = 0; i < 150000; ++i) {
-    Surfel s;
-    s.position = s.normal = Eigen::Vector3f::Zero();
-    s.confidence = 1;
-    s.first_frame = i;
-    map.Add(s);
-  }
+  SurfelMap map = NumberedMap(150000);
   for (size_t i = 50000; i < map.size(); i += 3) map.Remove(i);
   EXPECT_EQ(map.Compact(0.1), 50000u);
   ASSERT_EQ(map.size(), 150000u - 33334u);
@@ -368,6 +346,24 @@ TEST(SurfelMap, KeepsOrderAcrossItsBlocksWhenItCompactsAndGrowsAgain) {
   EXPECT_EQ(map[map.size() - 1].first_frame, expected[99999]);
   EXPECT_GT(map.MemoryBytes(), bytes);
   EXPECT_EQ(map.ToVector().size(), map.size());
+}
+
+// A map moved from is empty and usable; a removed surfel added to a map counts as removed.
+TEST(SurfelMap, AMovedFromMapIsEmptyAndRemovedSurfelsAddedCount) {
+  SurfelMap map = NumberedMap(10);
+  const Surfel s = map[0];
+  map.Remove(3);
+  SurfelMap moved = std::move(map);
+  EXPECT_EQ(moved.size(), 10u);
+  EXPECT_EQ(moved.live(), 9u);
+  EXPECT_EQ(map.size(), 0u);  // NOLINT(bugprone-use-after-move): defined as empty
+  map.Add(s);
+  EXPECT_EQ(map.live(), 1u);
+  SurfelMap copy;
+  for (const Surfel& t : moved.ToVector()) copy.Add(t);
+  EXPECT_EQ(copy.live(), 9u);
+  EXPECT_EQ(copy.Compact(0.1), 3u);
+  EXPECT_EQ(copy.size(), 9u);
 }
 
 TEST(SurfelPly, RoundTrip) {
