@@ -68,6 +68,7 @@ class SurfelMap {
   // A map moved from is empty.
   SurfelMap(SurfelMap&& other) noexcept { *this = std::move(other); }
   SurfelMap& operator=(SurfelMap&& other) noexcept {
+    if (this == &other) return *this;
     blocks_ = std::move(other.blocks_);
     other.blocks_.clear();
     size_ = std::exchange(other.size_, 0);
