@@ -25,8 +25,11 @@ bool FusionOptions::Check(std::string* message) const {
   if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m))
     return fail("fusion: need 0 < min_depth_m < max_depth_m");
   if (pixel_step < 1 || !(max_depth_gap_m > 0) || !(max_normal_angle_deg > 0) ||
-      !(max_normal_angle_deg <= 90) || !(max_radius_ratio > 0) || !(confidence_sigma > 0))
-    return fail("fusion: pixel_step >= 1, positive gap, angle in (0, 90], positive ratio, sigma");
+      !(max_normal_angle_deg <= 90) || !(max_radius_ratio > 0) || !(confidence_sigma > 0) ||
+      !(normal_test_min_facing >= 0 && normal_test_min_facing <= 1))
+    return fail(
+        "fusion: pixel_step >= 1, positive gap, angle in (0, 90], positive ratio, sigma, "
+        "normal_test_min_facing in [0, 1]");
   if (!(stable_confidence > 0) || unstable_frames < 1 || !(fill_weight > 0) ||
       !(fill_stable_confidence > 0) || fill_unstable_frames < 1)
     return fail("fusion: positive stable confidences, windows and fill weight");
@@ -118,7 +121,8 @@ FusionStats SurfelFusion::FuseFill(const RgbdFrame& frame, const cv::Mat& filled
 struct SurfelFusion::StepConstants {
   const cv::Mat* smooth_half;  // the depth at half size, bilateral-filtered (for normals)
   Eigen::Matrix3f world_from_camera_rotation;  // for the normal test in the world frame
-  float cos_max, focal, min_z, max_z, max_step, gap;
+  Eigen::Vector3f view_axis;                   // the camera's z axis in the world frame
+  float cos_max, min_facing, focal, min_z, max_z, max_step, gap;
   bool has_color;
 };
 
@@ -131,6 +135,8 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
   k.cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * kDegToRad));
   k.focal = static_cast<float>(0.5 * (camera_.fx + camera_.fy));
   k.world_from_camera_rotation = m.world_from_camera.RotationMatrix().cast<float>();
+  k.view_axis = k.world_from_camera_rotation.col(2);
+  k.min_facing = static_cast<float>(options_.normal_test_min_facing);
   k.min_z = static_cast<float>(options_.min_depth_m);
   k.max_z = static_cast<float>(options_.max_depth_m);
   k.max_step = static_cast<float>(options_.max_neighbour_step);
@@ -230,8 +236,9 @@ void SurfelFusion::MeasureRow(const Measurement& m, const StepConstants& k, int 
 int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
                                   const PixelResult& res) const {
   // The surfel in the 3x3 index-map window nearest the pixel's ray, within the depth gap along it
-  // and with a normal within the angle.
-  const float z = res.point.z(), gap = k.gap, cos_max = k.cos_max;
+  // and, where it faces the camera, with a normal within the angle.
+  const float z = res.point.z(), gap = k.gap, cos_max = k.cos_max, min_facing = k.min_facing;
+  const Eigen::Vector3f view_axis = k.view_axis;
   const Eigen::Vector3f ray = res.point / z;
   const float lambda = ray.norm();
   const Eigen::Vector3f normal_in_world = k.world_from_camera_rotation * res.normal;
@@ -248,7 +255,8 @@ int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
       const float qz = CellDepth(cell);
       if (std::abs(qz - z) * lambda >= gap) continue;
       const Front& f = fronts[dx];
-      if (f.normal.dot(normal_in_world) < cos_max) continue;
+      if (f.normal.dot(normal_in_world) < cos_max && std::abs(f.normal.dot(view_axis)) >= min_facing)
+        continue;
       const Eigen::Vector3f q(f.x, f.y, qz);
       const float dist = ray.cross(q).squaredNorm();  // |ray x q|^2 orders as the distance
       if (dist < best) {

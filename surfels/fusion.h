@@ -6,8 +6,8 @@
 //     pixel kept (the projected index map);
 //  2. each measured pixel (every pixel_step-th each way, the offset alternating between frames)
 //     with a vertex and normal looks for a surfel in the 3x3 index-map pixels around it: within
-//     max_depth_gap_m along its ray, normals within max_normal_angle_deg; the one nearest the ray
-//     wins;
+//     max_depth_gap_m along its ray, normals within max_normal_angle_deg (where the surfel faces
+//     the camera: normal_test_min_facing); the one nearest the ray wins;
 //  3. a match is merged by confidence-weighted averaging of position, normal, colour and radius
 //     when the measurement's radius is under max_radius_ratio times the surfel's (a closer, finer
 //     view), else only its confidence and time are updated; a pixel without a match starts a new,
@@ -58,7 +58,13 @@ struct FusionOptions {
   double max_depth_m = 4.0;       // (Kinect noise grows with the square of depth)
   int pixel_step = 2;             // fuse every pixel_step-th pixel each way (1: every pixel)
   double max_depth_gap_m = 0.05;  // association: surfel within this along the ray, metres
-  double max_normal_angle_deg = 30.0;    // ... and normals within this, degrees
+  double max_normal_angle_deg = 30.0;    // ... and normals within this, degrees, for surfels
+  // facing the camera: |n_z| of the surfel's normal in the camera at least this. More oblique
+  // surfaces have measured normals too noisy to compare (the depth step across the normal's
+  // baseline grows with the slant and with the sensor's quantisation), so there the depth gap and
+  // the distance to the ray decide alone. ElasticFusion's data.vert: 0.75, within 41 degrees of
+  // facing the camera. 0: test every surfel's normal.
+  double normal_test_min_facing = 0.75;
   double max_radius_ratio = 1.5;         // merge geometry only when the measured radius is smaller
   double confidence_sigma = 0.6;         // radial weight's sigma, in half image diagonals
   double stable_confidence = 10.0;       // a sensor surfel is stable from this confidence
@@ -71,9 +77,9 @@ struct FusionOptions {
   double free_space_penalty = 1.0;       // confidence a stable surfel loses per contradiction
   double max_neighbour_step = 0.05;      // normals only from neighbours within this relative step
   // Copies of a surface (step 5) are merged after every this many sensor frames: the pass costs
-  // about a sixth of a frame's fusion, and a copy that waits a frame is only hidden behind the
-  // surfel it copies meanwhile (on TUM fr1_xyz, 1 and 2 give the same map-eval coverage).
-  int merge_copies_every = 2;
+  // about a sixth of a frame's fusion, and a copy that waits is only hidden behind the surfel it
+  // copies meanwhile (association never reaches it), so the model is the same a few frames later.
+  int merge_copies_every = 4;
   // The map's budget, in surfels (48 bytes each: 4 M is 192 MB); beyond it the least confirmed go.
   long max_surfels = 4'000'000;
   // Normals come from the depth smoothed by a bilateral filter at half size: its diameter in

@@ -132,6 +132,37 @@ TEST(SurfelFusion, ACopyOfASurfaceMergesAndASurfaceBehindItStays) {
   EXPECT_EQ(far_wall, static_cast<int>(behind.size()));
 }
 
+// Association compares normals only where the surfel faces the camera (|n_z| in the camera at
+// least normal_test_min_facing): a surfel seen obliquely takes a measurement whatever their
+// normals; one facing the camera only a measurement whose normal is within max_normal_angle_deg.
+TEST(SurfelFusion, NormalsDecideAssociationOnlyWhereTheSurfelFacesTheCamera) {
+  const Camera camera = SmallCamera();
+  const SE3 pose = At(0, 0, 0);
+  SurfelFusion first(camera, {});
+  for (int i = 0; i < 15; ++i) first.FuseFrame(Wall(camera, pose), pose, 0);
+  std::vector<Surfel> wall;  // all of them, to the image's edges
+  for (const Surfel& s : first.map().ToVector())
+    if (!s.removed()) wall.push_back(s);
+  ASSERT_GT(wall.size(), 4000u);
+  // The share of a wall frame's pixels that start a new surfel, over the wall's surfels with
+  // their normal turned by `degrees` about the x axis (the wall faces -z, the camera +z).
+  auto created = [&](double degrees, const FusionOptions& options) {
+    std::vector<Surfel> turned = wall;
+    const float a = static_cast<float>(degrees * M_PI / 180);
+    for (Surfel& s : turned) s.normal = Eigen::Vector3f(0, std::sin(a), -std::cos(a));
+    SurfelFusion fusion(camera, options);
+    fusion.AddSurfels(turned);
+    const FusionStats stats = fusion.FuseFrame(Wall(camera, pose), pose, 0);
+    return static_cast<double>(stats.created) / stats.measured;
+  };
+  FusionOptions every_normal;
+  every_normal.normal_test_min_facing = 0;
+  EXPECT_LT(created(10, {}), 0.05);  // within the angle: merged
+  EXPECT_GT(created(35, {}), 0.95);  // facing the camera (|n_z| 0.82), beyond the angle: new
+  EXPECT_LT(created(60, {}), 0.05);  // oblique (|n_z| 0.5): merged whatever its normal
+  EXPECT_GT(created(60, every_normal), 0.95);
+}
+
 // Unstable surfels that left the view go within unstable_frames plus a sweep; the settled map
 // elsewhere stays.
 TEST(SurfelFusion, UnconfirmedSurfelsOutOfViewGo) {
