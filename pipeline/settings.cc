@@ -53,12 +53,11 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing
 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixel_step,
                                    max_depth_gap_m, max_normal_angle_deg, normal_test_min_facing,
-                                   max_radius_ratio,
-                                   confidence_sigma, stable_confidence, unstable_frames,
-                                   fill_weight, fill_stable_confidence, fill_unstable_frames,
-                                   free_space_margin, free_space_penalty, max_neighbour_step,
-                                   merge_copies_every, normal_filter_px, normal_filter_depth_m,
-                                   normal_baseline_px, max_surfels)
+                                   max_radius_ratio, confidence_sigma, stable_confidence,
+                                   unstable_frames, fill_weight, fill_stable_confidence,
+                                   fill_unstable_frames, free_space_margin, free_space_penalty,
+                                   max_neighbour_step, merge_copies_every, normal_filter_px,
+                                   normal_filter_depth_m, normal_baseline_px, max_surfels)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(KeyframeDatabaseOptions, words, vocabulary_keyframes,
                                    kmeans_iterations)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(AlignmentNoise, floor_m, floor_deg, bias)

@@ -255,7 +255,8 @@ int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
       const float qz = CellDepth(cell);
       if (std::abs(qz - z) * lambda >= gap) continue;
       const Front& f = fronts[dx];
-      if (f.normal.dot(normal_in_world) < cos_max && std::abs(f.normal.dot(view_axis)) >= min_facing)
+      if (f.normal.dot(normal_in_world) < cos_max &&
+          std::abs(f.normal.dot(view_axis)) >= min_facing)
         continue;
       const Eigen::Vector3f q(f.x, f.y, qz);
       const float dist = ray.cross(q).squaredNorm();  // |ray x q|^2 orders as the distance

@@ -58,7 +58,7 @@ struct FusionOptions {
   double max_depth_m = 4.0;       // (Kinect noise grows with the square of depth)
   int pixel_step = 2;             // fuse every pixel_step-th pixel each way (1: every pixel)
   double max_depth_gap_m = 0.05;  // association: surfel within this along the ray, metres
-  double max_normal_angle_deg = 30.0;    // ... and normals within this, degrees, for surfels
+  double max_normal_angle_deg = 30.0;  // ... and normals within this, degrees, for surfels
   // facing the camera: |n_z| of the surfel's normal in the camera at least this. More oblique
   // surfaces have measured normals too noisy to compare (the depth step across the normal's
   // baseline grows with the slant and with the sensor's quantisation), so there the depth gap and
