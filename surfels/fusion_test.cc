@@ -161,6 +161,9 @@ TEST(SurfelFusion, NormalsDecideAssociationOnlyWhereTheSurfelFacesTheCamera) {
   EXPECT_GT(created(35, {}), 0.95);  // facing the camera (|n_z| 0.82), beyond the angle: new
   EXPECT_LT(created(60, {}), 0.05);  // oblique (|n_z| 0.5): merged whatever its normal
   EXPECT_GT(created(60, every_normal), 0.95);
+  FusionOptions beyond_one;  // |n_z| is at most 1
+  beyond_one.normal_test_min_facing = 1.5;
+  EXPECT_FALSE(beyond_one.Check());
 }
 
 // Unstable surfels that left the view go within unstable_frames plus a sweep; the settled map
