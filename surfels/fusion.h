@@ -19,9 +19,9 @@
 //     removed); unstable surfels not updated for unstable_frames frames are removed, unconfirmed
 //     fills after fill_unstable_frames;
 //  5. copies of a surface merge (every merge_copies_every-th frame): two surfels in the same 3x3
-//     index-map pixels that association would take for one surface (depths within
-//     free_space_margin, normals within max_normal_angle_deg), each centre within the other's
-//     disc, are merged into the more confident of the two, so passes over the same surface do
+//     index-map pixels that lie on one surface (depths within free_space_margin, normals within
+//     max_normal_angle_deg whatever their facing), each centre within the other's disc, are
+//     merged into the more confident of the two, so passes over the same surface do
 //     not stack copies of it;
 //  6. the map holds at most max_surfels: beyond it, the least confirmed surfels go (unstable
 //     first, then the stable ones seen longest ago).

@@ -117,9 +117,10 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
 }
 
 void SurfelFusion::MergeRedundant(FusionStats* stats) {
-  // Two surfels that project into the same 3x3 pixels of the index map and that association takes
-  // for one surface (depths within free_space_margin of each other, normals within
-  // max_normal_angle_deg), with each centre within the other's disc, are copies of one piece
+  // Two surfels that project into the same 3x3 pixels of the index map and that lie on one surface
+  // (depths within free_space_margin of each other, normals within max_normal_angle_deg whatever
+  // their facing: a surfel's normal is averaged over its measurements, steadier than one pixel's),
+  // with each centre within the other's disc, are copies of one piece
   // of surface (passes with slightly different poses leave them); the hidden one is
   // invisible to association from here on, so keeping both only stacks copies. The less confident
   // one is merged into the other, by the same confidence-weighted average as a measurement; the

@@ -137,30 +137,37 @@ TEST(SurfelFusion, ACopyOfASurfaceMergesAndASurfaceBehindItStays) {
 // normals; one facing the camera only a measurement whose normal is within max_normal_angle_deg.
 TEST(SurfelFusion, NormalsDecideAssociationOnlyWhereTheSurfelFacesTheCamera) {
   const Camera camera = SmallCamera();
-  const SE3 pose = At(0, 0, 0);
-  SurfelFusion first(camera, {});
-  for (int i = 0; i < 15; ++i) first.FuseFrame(Wall(camera, pose), pose, 0);
-  std::vector<Surfel> wall;  // all of them, to the image's edges
-  for (const Surfel& s : first.map().ToVector())
-    if (!s.removed()) wall.push_back(s);
-  ASSERT_GT(wall.size(), 4000u);
-  // The share of a wall frame's pixels that start a new surfel, over the wall's surfels with
-  // their normal turned by `degrees` about the x axis (the wall faces -z, the camera +z).
-  auto created = [&](double degrees, const FusionOptions& options) {
-    std::vector<Surfel> turned = wall;
+  // The share of a wall frame's pixels that start a new surfel, seen from `pose`, over the
+  // surfels of the same wall (all of them, to the image's edges) with their normal turned by
+  // `degrees` about the world's x axis (the wall faces -z).
+  auto created = [&](const SE3& pose, double degrees, const FusionOptions& options) {
+    SurfelFusion first(camera, {});
+    for (int i = 0; i < 15; ++i) first.FuseFrame(Wall(camera, pose), pose, 0);
+    std::vector<Surfel> turned;
     const float a = static_cast<float>(degrees * M_PI / 180);
-    for (Surfel& s : turned) s.normal = Eigen::Vector3f(0, std::sin(a), -std::cos(a));
+    for (Surfel s : first.map().ToVector()) {
+      if (s.removed()) continue;
+      s.normal = Eigen::Vector3f(0, std::sin(a), -std::cos(a));
+      turned.push_back(s);
+    }
+    EXPECT_GT(turned.size(), 4000u);
     SurfelFusion fusion(camera, options);
     fusion.AddSurfels(turned);
     const FusionStats stats = fusion.FuseFrame(Wall(camera, pose), pose, 0);
     return static_cast<double>(stats.created) / stats.measured;
   };
+  const SE3 ahead = At(0, 0, 0);
   FusionOptions every_normal;
   every_normal.normal_test_min_facing = 0;
-  EXPECT_LT(created(10, {}), 0.05);  // within the angle: merged
-  EXPECT_GT(created(35, {}), 0.95);  // facing the camera (|n_z| 0.82), beyond the angle: new
-  EXPECT_LT(created(60, {}), 0.05);  // oblique (|n_z| 0.5): merged whatever its normal
-  EXPECT_GT(created(60, every_normal), 0.95);
+  EXPECT_LT(created(ahead, 10, {}), 0.05);  // within the angle: merged
+  EXPECT_GT(created(ahead, 35, {}), 0.95);  // facing the camera (|n_z| 0.82), beyond it: new
+  EXPECT_LT(created(ahead, 60, {}), 0.05);  // oblique (|n_z| 0.5): merged whatever its normal
+  EXPECT_GT(created(ahead, 60, every_normal), 0.95);
+  // Facing is judged in the camera: turned 30 degrees about y, the camera sees the 35-degree
+  // normals at |n_z| = cos 35 cos 30 = 0.71, obliquely (in the world frame their z is 0.82).
+  const SE3 turned_camera(Eigen::AngleAxisd(30 * M_PI / 180, Eigen::Vector3d::UnitY()).matrix(),
+                          Eigen::Vector3d::Zero());
+  EXPECT_LT(created(turned_camera, 35, {}), 0.05);
   FusionOptions beyond_one;  // |n_z| is at most 1
   beyond_one.normal_test_min_facing = 1.5;
   EXPECT_FALSE(beyond_one.Check());
