@@ -120,8 +120,6 @@ FusionStats SurfelFusion::FuseFill(const RgbdFrame& frame, const cv::Mat& filled
 // What stays the same over one measurement's pixels.
 struct SurfelFusion::StepConstants {
   const cv::Mat* smooth_half;  // the depth at half size, bilateral-filtered (for normals)
-  Eigen::Matrix3f world_from_camera_rotation;  // for the normal test in the world frame
-  Eigen::Vector3f view_axis;                   // the camera's z axis in the world frame
   float cos_max, min_facing, focal, min_z, max_z, max_step, gap;
   bool has_color;
 };
@@ -134,8 +132,6 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
   StepConstants k;
   k.cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * kDegToRad));
   k.focal = static_cast<float>(0.5 * (camera_.fx + camera_.fy));
-  k.world_from_camera_rotation = m.world_from_camera.RotationMatrix().cast<float>();
-  k.view_axis = k.world_from_camera_rotation.col(2);
   k.min_facing = static_cast<float>(options_.normal_test_min_facing);
   k.min_z = static_cast<float>(options_.min_depth_m);
   k.max_z = static_cast<float>(options_.max_depth_m);
@@ -203,9 +199,13 @@ void SurfelFusion::MeasureRow(const Measurement& m, const StepConstants& k, int 
     const float z = depth[x];
     if (!(z >= min_z && z <= max_z)) continue;
     // A normal needs all four neighbours on the same surface.
-    bool neighbours = true;
-    for (const float zn : {depth[x - 1], depth[x + 1], depth_up[x], depth_down[x]})
-      neighbours &= zn > 0 && std::abs(zn - z) <= max_step * z;
+    // (Bitwise, not short-circuit: four compares and no branch each.)
+    const float step_z = max_step * z;
+    const float left_z = depth[x - 1], right_z = depth[x + 1], up_z = depth_up[x],
+                down_z = depth_down[x];
+    const bool neighbours = (left_z > 0) & (right_z > 0) & (up_z > 0) & (down_z > 0) &
+                            (std::abs(left_z - z) <= step_z) & (std::abs(right_z - z) <= step_z) &
+                            (std::abs(up_z - z) <= step_z) & (std::abs(down_z - z) <= step_z);
     if (!neighbours) continue;
     PixelResult& res = row[gx];
     res.point = vertex(ray[x], z);
@@ -229,19 +229,19 @@ void SurfelFusion::MeasureRow(const Measurement& m, const StepConstants& k, int 
     }
     res.source = source;
     res.valid = true;
-    res.match = NearestAlongRay(k, x, y, res);
+    res.match = NearestAlongRay(k, x, y, ray[x], res);
   }
 }
 
-int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
+int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y, const cv::Vec2f& ray,
                                   const PixelResult& res) const {
   // The surfel in the 3x3 index-map window nearest the pixel's ray, within the depth gap along it
-  // and, where it faces the camera, with a normal within the angle.
-  const float z = res.point.z(), gap = k.gap, cos_max = k.cos_max, min_facing = k.min_facing;
-  const Eigen::Vector3f view_axis = k.view_axis;
-  const Eigen::Vector3f ray = res.point / z;
-  const float lambda = ray.norm();
-  const Eigen::Vector3f normal_in_world = k.world_from_camera_rotation * res.normal;
+  // and, where it faces the camera, with a normal within the angle (both normals in the camera).
+  const float z = res.point.z(), cos_max = k.cos_max, min_facing = k.min_facing;
+  const float rx = ray[0], ry = ray[1];
+  // |z_surfel - z| * |ray| < gap: the distance along the ray.
+  const float gap_in_z = k.gap / std::sqrt(1.f + rx * rx + ry * ry);
+  const Eigen::Vector3f normal = res.normal;
   float best = std::numeric_limits<float>::max();
   int match = -1;
   const size_t width = camera_.width;
@@ -253,13 +253,12 @@ int SurfelFusion::NearestAlongRay(const StepConstants& k, int x, int y,
       const uint64_t cell = cells[dx];
       if (cell == kEmpty) continue;
       const float qz = CellDepth(cell);
-      if (std::abs(qz - z) * lambda >= gap) continue;
+      if (std::abs(qz - z) >= gap_in_z) continue;
       const Front& f = fronts[dx];
-      if (f.normal.dot(normal_in_world) < cos_max &&
-          std::abs(f.normal.dot(view_axis)) >= min_facing)
-        continue;
-      const Eigen::Vector3f q(f.x, f.y, qz);
-      const float dist = ray.cross(q).squaredNorm();  // |ray x q|^2 orders as the distance
+      if (f.normal.dot(normal) < cos_max && std::abs(f.normal.z()) >= min_facing) continue;
+      // |ray x q|^2 orders as the distance from the ray, ray = (rx, ry, 1).
+      const float cx = ry * qz - f.y, cy = f.x - rx * qz, cz = rx * f.y - ry * f.x;
+      const float dist = cx * cx + cy * cy + cz * cz;
       if (dist < best) {
         best = dist;
         match = static_cast<int>(CellEntry(cell));

@@ -173,8 +173,9 @@ class SurfelFusion {
   // normal, radius, weight, colour and the surfel it associates with (valid false: not measurable).
   void MeasureRow(const Measurement& m, const StepConstants& k, int y, PixelResult* row) const;
   // The entry (index into visible_) of the surfel the measured pixel at (x, y) associates with,
-  // -1 none.
-  int NearestAlongRay(const StepConstants& k, int x, int y, const PixelResult& res) const;
+  // -1 none; `ray` is the pixel's (x/z, y/z).
+  int NearestAlongRay(const StepConstants& k, int x, int y, const cv::Vec2f& ray,
+                      const PixelResult& res) const;
   void Integrate(const Measurement& m, const std::vector<PixelResult>& results, FusionStats* stats);
   // The entries of this step (the surfels of the chunks in view) and the index map: culling, then
   // ProjectEntries (each entry's position in the camera and its pixel), then NearestPerPixel (the
@@ -225,15 +226,18 @@ class SurfelFusion {
   // with their position in the camera and their pixel (y * width + x, -1 when not in
   // the image), and the projected index map (nearest entry per pixel, packed depth and entry).
   std::vector<uint32_t> visible_;
+  Eigen::Matrix3f camera_rotation_ = Eigen::Matrix3f::Identity();  // of this step's camera_from_world
   std::vector<Eigen::Vector3f> in_camera_;
   // Per entry, its surfel's world normal and radius (set where the surfel is not removed), so that
   // the per-pixel searches read the entries of this step, not the whole map.
   std::vector<Eigen::Vector4f> normal_radius_;
   std::vector<int32_t> pixel_of_;
   // Per entry, what the cleanup after a step needs to know without reading the surfel: set when a
-  // pixel merged into it this step (kUpdated), and when it was unstable at projection or lost
-  // confidence to free space since (kUnstable: a candidate for removal when stale).
-  static constexpr uint8_t kUpdated = 1, kUnstable = 2;
+  // pixel merged into it this step (kUpdated), and when it may go stale at this step's cleanup
+  // (kMayGoStale: unstable at projection and not updated for its source's window, so it goes
+  // unless this step confirms it; or it lost confidence to free space since, so it may be
+  // unstable now).
+  static constexpr uint8_t kUpdated = 1, kMayGoStale = 2;
   std::vector<uint8_t> entry_flags_;
   std::vector<uint64_t> index_map_;
   // The depth and entry an index-map cell packs (the depth's bits above the entry's, so that the
@@ -251,7 +255,7 @@ class SurfelFusion {
   // 7 MB at 640x480), so it holds nothing the index map has.
   struct Front {
     float x, y;              // position in the camera (its z: the cell's depth)
-    Eigen::Vector3f normal;  // world frame
+    Eigen::Vector3f normal;  // in the camera (compared with measured normals as it is)
     float radius;
   };
   std::vector<Front> front_;

@@ -44,10 +44,11 @@ void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
       chunks_[c].settled = settled;
     }
   } else {
-    // Those in view that were unstable at projection, or lost confidence since (the others are
-    // stable: merges only add confidence).
+    // Those in view that projection found unstable and old enough, unless a pixel updated them,
+    // and those that lost confidence since. The others cannot be stale: merges only add confidence
+    // and make last_frame recent, and this step's frame is the one projection compared with.
     for (size_t e = 0; e < visible_.size(); ++e)
-      if (entry_flags_[e] & kUnstable) stale(visible_[e]);
+      if ((entry_flags_[e] & (kMayGoStale | kUpdated)) == kMayGoStale) stale(visible_[e]);
   }
   KeepWithinBudget(stats);
   // Compaction moves the surfels after the first removed one: only their chunks are new.
@@ -110,7 +111,7 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
       ++stats->removed;
     } else {
       s.confidence -= penalty;
-      entry_flags_[e] |= kUnstable;  // it may be unstable now
+      entry_flags_[e] |= kMayGoStale;  // it may be unstable now
       Touch(i);
     }
   }
@@ -158,7 +159,7 @@ void SurfelFusion::FindCopies() {
   const float margin = static_cast<float>(options_.free_space_margin);
   const float cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * M_PI / 180.0));
   const int width = camera_.width, height = camera_.height;
-  // a, b: an entry's position in the camera, world normal and radius.
+  // a, b: an entry's position and normal in the camera, and its radius.
   auto copies = [&](const Eigen::Vector3f& qa, const Eigen::Vector3f& na, float ra,
                     const Eigen::Vector3f& qb, const Eigen::Vector3f& nb, float rb) {
     if (std::abs(qa.z() - qb.z()) > margin * qb.z() || na.dot(nb) < cos_max) return false;
@@ -181,8 +182,8 @@ void SurfelFusion::FindCopies() {
       if (CellEntry(cell) == static_cast<uint32_t>(e)) continue;
       const Front& f = front_[pixel];
       const Eigen::Vector4f& a = normal_radius_[e];
-      if (copies(in_camera_[e], a.head<3>(), a.w(), {f.x, f.y, CellDepth(cell)}, f.normal,
-                 f.radius))
+      if (copies(in_camera_[e], camera_rotation_ * a.head<3>(), a.w(), {f.x, f.y, CellDepth(cell)},
+                 f.normal, f.radius))
         partner[e] = static_cast<int32_t>(CellEntry(cell));
     }
   });

@@ -22,19 +22,24 @@ uint64_t Pack(float z, uint32_t index) {
 bool SurfelFusion::ChunkVisible(size_t c, const SE3& camera_from_world) {
   Chunk& chunk = chunks_[c];
   if (chunk.dirty) {
-    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-    Eigen::Vector3f hi = -lo;
-    float largest = 0;
+    // Over every surfel of the chunk, removed ones too (their position is still a real one, and
+    // compaction drops them soon): a branch-free pass, and a sphere that still holds the live ones.
+    float lo[3], hi[3], largest = 0, live = 0;
+    for (int a = 0; a < 3; ++a) lo[a] = std::numeric_limits<float>::max(), hi[a] = -lo[a];
     const size_t end = std::min(map_.size(), (c + 1) * kChunk);
-    for (size_t i = c * kChunk; i < end; ++i) {
-      const Surfel& s = map_[i];
-      if (s.removed()) continue;
-      lo = lo.cwiseMin(s.position);
-      hi = hi.cwiseMax(s.position);
+    const Surfel* const surfels = &map_[c * kChunk];  // a chunk lies within one block of the map
+    for (size_t j = 0; j < end - c * kChunk; ++j) {
+      const Surfel& s = surfels[j];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], s.position[a]);
+        hi[a] = std::max(hi[a], s.position[a]);
+      }
       largest = std::max(largest, s.radius);
+      live = std::max(live, s.confidence);  // removed: confidence < 0
     }
-    chunk.centre = 0.5f * (lo + hi);
-    chunk.radius = lo.x() > hi.x() ? -1.f : 0.5f * (hi - lo).norm() + largest;
+    const Eigen::Vector3f low(lo[0], lo[1], lo[2]), high(hi[0], hi[1], hi[2]);
+    chunk.centre = 0.5f * (low + high);
+    chunk.radius = live > 0 ? 0.5f * (high - low).norm() + largest : -1.f;
     chunk.dirty = false;
   }
   if (chunk.radius < 0) return false;  // all removed
@@ -73,6 +78,7 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   normal_radius_.resize(entries);
   pixel_of_.assign(entries, -1);
   entry_flags_.assign(entries, 0);
+  camera_rotation_ = camera_from_world.RotationMatrix().cast<float>();
   ProjectEntries(camera_from_world);
   NearestPerPixel();
 }
@@ -98,6 +104,10 @@ void SurfelFusion::ProjectEntries(const SE3& camera_from_world) {
     const float near = static_cast<float>(options_.min_depth_m * 0.5);
     const double stable_confidence = options_.stable_confidence,
                  fill_stable_confidence = options_.fill_stable_confidence;
+    // Unstable surfels last updated before these frames go stale at this step's cleanup unless a
+    // pixel updates them (CleanUp's stale test, for a time step's frame_).
+    const int sensor_stale_before = frame_ - options_.unstable_frames,
+              fill_stale_before = frame_ - options_.fill_unstable_frames;
     uint32_t* const visible = visible_.data();
     uint8_t* const flags = entry_flags_.data();
     Eigen::Vector4f* const normal_radius = normal_radius_.data();
@@ -113,15 +123,17 @@ void SurfelFusion::ProjectEntries(const SE3& camera_from_world) {
         const Surfel& s = chunk[i - first];
         if (s.removed()) continue;
         // IsStable, with the thresholds in locals.
-        const bool stable = s.source == static_cast<uint8_t>(DepthSource::kSensor)
-                                ? s.confidence >= stable_confidence
-                                : s.confidence >= fill_stable_confidence;
-        if (!stable) flags[e] = kUnstable;
+        const bool sensor = s.source == static_cast<uint8_t>(DepthSource::kSensor);
+        const bool stable = sensor ? s.confidence >= stable_confidence
+                                   : s.confidence >= fill_stable_confidence;
+        if (!stable && s.last_frame < (sensor ? sensor_stale_before : fill_stale_before))
+          flags[e] = kMayGoStale;
         normal_radius[e] << s.normal, s.radius;
         const Eigen::Vector3f q = r * s.position + t;
         in_camera[e] = q;
         if (q.z() < near) continue;
-        const float a = q.x() / q.z(), b = q.y() / q.z(), r2 = a * a + b * b;
+        const float to_plane = 1.f / q.z();
+        const float a = q.x() * to_plane, b = q.y() * to_plane, r2 = a * a + b * b;
         const float radial = 1.f + r2 * (k1 + r2 * (k2 + r2 * k3));
         const float u = fx * (a * radial + 2.f * p1 * a * b + p2 * (r2 + 2.f * a * a)) + cx;
         const float v = fy * (b * radial + p1 * (r2 + 2.f * b * b) + 2.f * p2 * a * b) + cy;
@@ -166,15 +178,16 @@ void SurfelFusion::NearestPerPixel() {
     }
   });
   // Each pixel's front entry, copied into pixel order (front_ is read only where index_map_ is
-  // not empty).
+  // not empty), its normal turned into the camera.
+  const Eigen::Matrix3f rotation = camera_rotation_;
   cv::parallel_for_(cv::Range(0, entries), [&](const cv::Range& range) {
     for (int e = range.start; e < range.end; ++e) {
       if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= 0)
         __builtin_prefetch(&index_map_[pixel_of_[e + kPrefetch]]);
       const int pixel = pixel_of_[e];
       if (pixel < 0 || CellEntry(index_map_[pixel]) != static_cast<uint32_t>(e)) continue;
-      front_[pixel] = {in_camera_[e].x(), in_camera_[e].y(), normal_radius_[e].head<3>(),
-                       normal_radius_[e].w()};
+      front_[pixel] = {in_camera_[e].x(), in_camera_[e].y(),
+                       rotation * normal_radius_[e].head<3>(), normal_radius_[e].w()};
     }
   });
 }

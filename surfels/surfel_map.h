@@ -44,13 +44,14 @@ static_assert(sizeof(Surfel) <= 48, "a surfel should stay within 48 bytes");
 // confidence and that weight (s's radius and confidence are the caller's).
 inline void BlendInto(Surfel* s, float weight, const Eigen::Vector3f& position,
                       const Eigen::Vector3f& normal, uint8_t red, uint8_t green, uint8_t blue) {
-  const float c = s->confidence, sum = c + weight;
-  s->position = (c * s->position + weight * position) / sum;
-  s->normal = ((c * s->normal + weight * normal) / sum).normalized();
+  const float c = s->confidence, to_sum = 1.f / (c + weight);
+  const float old_share = c * to_sum, new_share = weight * to_sum;
+  s->position = old_share * s->position + new_share * position;
+  s->normal = (c * s->normal + weight * normal).normalized();
   // Colour channels are in [0, 255], so adding 0.5 rounds them.
-  s->red = static_cast<uint8_t>((c * s->red + weight * red) / sum + 0.5f);
-  s->green = static_cast<uint8_t>((c * s->green + weight * green) / sum + 0.5f);
-  s->blue = static_cast<uint8_t>((c * s->blue + weight * blue) / sum + 0.5f);
+  s->red = static_cast<uint8_t>(old_share * s->red + new_share * red + 0.5f);
+  s->green = static_cast<uint8_t>(old_share * s->green + new_share * green + 0.5f);
+  s->blue = static_cast<uint8_t>(old_share * s->blue + new_share * blue + 0.5f);
 }
 
 class SurfelMap {
