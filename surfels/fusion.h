@@ -234,9 +234,9 @@ class SurfelFusion {
   std::vector<int32_t> pixel_of_;
   // Per entry, what the cleanup after a step needs to know without reading the surfel: set when a
   // pixel merged into it this step (kUpdated), and when it may go stale at this step's cleanup
-  // (kMayGoStale: unstable at projection and not updated for its source's window, so it goes
-  // unless this step confirms it; or it lost confidence to free space since, so it may be
-  // unstable now).
+  // (kMayGoStale: unstable at projection and not updated for its source's window, so the cleanup
+  // re-checks it unless a pixel updated it; or it lost confidence to free space since, so it may
+  // be unstable now).
   static constexpr uint8_t kUpdated = 1, kMayGoStale = 2;
   std::vector<uint8_t> entry_flags_;
   std::vector<uint64_t> index_map_;

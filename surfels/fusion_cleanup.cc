@@ -46,7 +46,7 @@ void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
   } else {
     // Those in view that projection found unstable and old enough, unless a pixel updated them,
     // and those that lost confidence since. The others cannot be stale: merges only add confidence
-    // and make last_frame recent, and this step's frame is the one projection compared with.
+    // and never make last_frame older, and this step's frame is the one projection compared with.
     for (size_t e = 0; e < visible_.size(); ++e)
       if ((entry_flags_[e] & (kMayGoStale | kUpdated)) == kMayGoStale) stale(visible_[e]);
   }

@@ -22,24 +22,25 @@ uint64_t Pack(float z, uint32_t index) {
 bool SurfelFusion::ChunkVisible(size_t c, const SE3& camera_from_world) {
   Chunk& chunk = chunks_[c];
   if (chunk.dirty) {
-    // Over every surfel of the chunk, removed ones too (their position is still a real one, and
-    // compaction drops them soon): a branch-free pass, and a sphere that still holds the live ones.
-    float lo[3], hi[3], largest = 0, live = 0;
+    // Over the live surfels of the chunk, branch-free (a removed one repeats the bound so far).
+    float lo[3], hi[3], largest = 0;
     for (int a = 0; a < 3; ++a) lo[a] = std::numeric_limits<float>::max(), hi[a] = -lo[a];
+    bool any_live = false;
     const size_t end = std::min(map_.size(), (c + 1) * kChunk);
     const Surfel* const surfels = &map_[c * kChunk];  // a chunk lies within one block of the map
     for (size_t j = 0; j < end - c * kChunk; ++j) {
       const Surfel& s = surfels[j];
+      const bool removed = s.removed();
       for (int a = 0; a < 3; ++a) {
-        lo[a] = std::min(lo[a], s.position[a]);
-        hi[a] = std::max(hi[a], s.position[a]);
+        lo[a] = std::min(lo[a], removed ? lo[a] : s.position[a]);
+        hi[a] = std::max(hi[a], removed ? hi[a] : s.position[a]);
       }
-      largest = std::max(largest, s.radius);
-      live = std::max(live, s.confidence);  // removed: confidence < 0
+      largest = std::max(largest, removed ? 0.f : s.radius);
+      any_live |= !removed;
     }
     const Eigen::Vector3f low(lo[0], lo[1], lo[2]), high(hi[0], hi[1], hi[2]);
     chunk.centre = 0.5f * (low + high);
-    chunk.radius = live > 0 ? 0.5f * (high - low).norm() + largest : -1.f;
+    chunk.radius = any_live ? 0.5f * (high - low).norm() + largest : -1.f;
     chunk.dirty = false;
   }
   if (chunk.radius < 0) return false;  // all removed
