@@ -168,10 +168,21 @@ class SurfelFusion {
     DepthSource source = DepthSource::kSensor;
   };
   struct StepConstants;
+  // One grid row's normals from RowNormals, per grid column: unit, camera frame, facing the
+  // camera; has_normal 1 where the neighbours gave one (floats, as the rest: the loop vectorises).
+  struct GridRow {
+    explicit GridRow(int columns) : nx(columns), ny(columns), nz(columns), has_normal(columns) {}
+    std::vector<float> nx, ny, nz, has_normal;
+  };
   FusionStats Fuse(const Measurement& m);
   // The measured pixels of image row y (every pixel_step-th from grid_offset): each one's vertex,
   // normal, radius, weight, colour and the surfel it associates with (valid false: not measurable).
-  void MeasureRow(const Measurement& m, const StepConstants& k, int y, PixelResult* row) const;
+  // grid: scratch for the row's normals.
+  void MeasureRow(const Measurement& m, const StepConstants& k, int y, PixelResult* row,
+                  GridRow* grid) const;
+  // The normals of grid columns [first, end) of image row y, from the smoothed half-size depth.
+  void RowNormals(const cv::Mat& smooth, int grid_offset, int y, int first, int end,
+                  GridRow* grid) const;
   // The entry (index into visible_) of the surfel the measured pixel at (x, y) associates with,
   // -1 none; `ray` is the pixel's (x/z, y/z).
   int NearestAlongRay(const StepConstants& k, int x, int y, const cv::Vec2f& ray,
@@ -211,13 +222,16 @@ class SurfelFusion {
     bool settled = false;  // no unstable surfel at the last full sweep, and untouched since
   };
   std::vector<Chunk> chunks_;
-  std::vector<uint8_t> in_view_;      // per chunk, in view this step
-  std::vector<size_t> entry_offset_;  // per chunk in view, its first entry
+  std::vector<uint8_t> in_view_;                   // per chunk, in view this step
+  std::vector<size_t> entry_offset_;               // per chunk in view, its first entry
   float view_x_[2] = {0, 0}, view_y_[2] = {0, 0};  // the image's extent in x/z and y/z
 
   Camera camera_;
   FusionOptions options_;
-  cv::Mat rays_;           // CV_32FC2: each pixel's ray (x/z, y/z), lens distortion removed
+  cv::Mat rays_;  // CV_32FC2: each pixel's ray (x/z, y/z), lens distortion removed
+  // CV_32F, half size: the ray (x/z, y/z) of the pixel whose depth each cell of the half-size
+  // depth holds (the same nearest-pixel resize).
+  cv::Mat half_ray_x_, half_ray_y_;
   cv::Mat radial_weight_;  // CV_32F: each pixel's weight by its distance from the image centre
   SurfelMap map_;
   int frame_ = 0;  // time steps (sensor frames) so far
@@ -226,7 +240,8 @@ class SurfelFusion {
   // with their position in the camera and their pixel (y * width + x, -1 when not in
   // the image), and the projected index map (nearest entry per pixel, packed depth and entry).
   std::vector<uint32_t> visible_;
-  Eigen::Matrix3f camera_rotation_ = Eigen::Matrix3f::Identity();  // of this step's camera_from_world
+  Eigen::Matrix3f camera_rotation_ =
+      Eigen::Matrix3f::Identity();  // of this step's camera_from_world
   std::vector<Eigen::Vector3f> in_camera_;
   // Per entry, its surfel's world normal and radius (set where the surfel is not removed), so that
   // the per-pixel searches read the entries of this step, not the whole map.

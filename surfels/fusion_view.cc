@@ -22,25 +22,19 @@ uint64_t Pack(float z, uint32_t index) {
 bool SurfelFusion::ChunkVisible(size_t c, const SE3& camera_from_world) {
   Chunk& chunk = chunks_[c];
   if (chunk.dirty) {
-    // Over the live surfels of the chunk, branch-free (a removed one repeats the bound so far).
-    float lo[3], hi[3], largest = 0;
-    for (int a = 0; a < 3; ++a) lo[a] = std::numeric_limits<float>::max(), hi[a] = -lo[a];
-    bool any_live = false;
+    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+    Eigen::Vector3f hi = -lo;
+    float largest = 0;
     const size_t end = std::min(map_.size(), (c + 1) * kChunk);
-    const Surfel* const surfels = &map_[c * kChunk];  // a chunk lies within one block of the map
-    for (size_t j = 0; j < end - c * kChunk; ++j) {
-      const Surfel& s = surfels[j];
-      const bool removed = s.removed();
-      for (int a = 0; a < 3; ++a) {
-        lo[a] = std::min(lo[a], removed ? lo[a] : s.position[a]);
-        hi[a] = std::max(hi[a], removed ? hi[a] : s.position[a]);
-      }
-      largest = std::max(largest, removed ? 0.f : s.radius);
-      any_live |= !removed;
+    for (size_t i = c * kChunk; i < end; ++i) {
+      const Surfel& s = map_[i];
+      if (s.removed()) continue;
+      lo = lo.cwiseMin(s.position);
+      hi = hi.cwiseMax(s.position);
+      largest = std::max(largest, s.radius);
     }
-    const Eigen::Vector3f low(lo[0], lo[1], lo[2]), high(hi[0], hi[1], hi[2]);
-    chunk.centre = 0.5f * (low + high);
-    chunk.radius = any_live ? 0.5f * (high - low).norm() + largest : -1.f;
+    chunk.centre = 0.5f * (lo + hi);
+    chunk.radius = lo.x() > hi.x() ? -1.f : 0.5f * (hi - lo).norm() + largest;
     chunk.dirty = false;
   }
   if (chunk.radius < 0) return false;  // all removed
@@ -99,9 +93,8 @@ void SurfelFusion::ProjectEntries(const SE3& camera_from_world) {
     const Eigen::Vector3f t = translation;
     const int width = camera_.width, height = camera_.height;
     const float fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
-    const float k1 = camera_.distortion[0], k2 = camera_.distortion[1],
-                p1 = camera_.distortion[2], p2 = camera_.distortion[3],
-                k3 = camera_.distortion[4];
+    const float k1 = camera_.distortion[0], k2 = camera_.distortion[1], p1 = camera_.distortion[2],
+                p2 = camera_.distortion[3], k3 = camera_.distortion[4];
     const float near = static_cast<float>(options_.min_depth_m * 0.5);
     const double stable_confidence = options_.stable_confidence,
                  fill_stable_confidence = options_.fill_stable_confidence;
@@ -125,8 +118,8 @@ void SurfelFusion::ProjectEntries(const SE3& camera_from_world) {
         if (s.removed()) continue;
         // IsStable, with the thresholds in locals.
         const bool sensor = s.source == static_cast<uint8_t>(DepthSource::kSensor);
-        const bool stable = sensor ? s.confidence >= stable_confidence
-                                   : s.confidence >= fill_stable_confidence;
+        const bool stable =
+            sensor ? s.confidence >= stable_confidence : s.confidence >= fill_stable_confidence;
         if (!stable && s.last_frame < (sensor ? sensor_stale_before : fill_stale_before))
           flags[e] = kMayGoStale;
         normal_radius[e] << s.normal, s.radius;
@@ -187,8 +180,8 @@ void SurfelFusion::NearestPerPixel() {
         __builtin_prefetch(&index_map_[pixel_of_[e + kPrefetch]]);
       const int pixel = pixel_of_[e];
       if (pixel < 0 || CellEntry(index_map_[pixel]) != static_cast<uint32_t>(e)) continue;
-      front_[pixel] = {in_camera_[e].x(), in_camera_[e].y(),
-                       rotation * normal_radius_[e].head<3>(), normal_radius_[e].w()};
+      front_[pixel] = {in_camera_[e].x(), in_camera_[e].y(), rotation * normal_radius_[e].head<3>(),
+                       normal_radius_[e].w()};
     }
   });
 }
