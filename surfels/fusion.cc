@@ -157,7 +157,9 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
   std::vector<PixelResult>& results = results_;  // kept between steps: no allocation per step
   results.resize(static_cast<size_t>(grid_cols) * grid_rows);
   cv::parallel_for_(cv::Range(0, grid_rows), [&](const cv::Range& range) {
-    GridRow normals(grid_cols);
+    // Per thread, kept between rows and steps (OpenCV may hand each row to a task of its own).
+    thread_local GridRow normals(0);
+    normals.Resize(grid_cols);
     for (int gy = range.start; gy < range.end; ++gy)
       MeasureRow(m, k, m.grid_offset + gy * step, &results[static_cast<size_t>(gy) * grid_cols],
                  &normals);
@@ -194,7 +196,9 @@ void SurfelFusion::MeasureRow(const Measurement& m, const StepConstants& k, int 
   const DepthSource source = m.source;
   // Grid columns whose pixel lies border or more inside the image (x = grid_offset + step gx).
   const int first = std::max(0, (border - m.grid_offset + step - 1) / step);
-  const int end = std::min(grid_cols, (width - 1 - border - m.grid_offset) / step + 1);
+  const int last_x = width - 1 - border;  // (below the offset: no column, as division truncates)
+  const int end =
+      last_x < m.grid_offset ? 0 : std::min(grid_cols, (last_x - m.grid_offset) / step + 1);
   if (first >= end) return;
   RowNormals(*k.smooth_half, m.grid_offset, y, first, end, grid);
   for (int gx = first; gx < end; ++gx) {
@@ -242,7 +246,7 @@ inline void UnitNormal(float ax, float ay, float az, float bx, float by, float b
   const float inverse = 1.f / std::sqrt(std::max(norm2, 1e-30f));
   const float scale = cx * ray_x + cy * ray_y + cz > 0 ? -inverse : inverse;
   *nx = cx * scale, *ny = cy * scale, *nz = cz * scale;
-  *has = norm2 > 0 ? 1.f : 0.f;
+  *has = norm2 >= 1e-30f ? 1.f : 0.f;  // below, the clamp would leave it short of unit length
 }
 
 // RowNormals' loop for the step-2 grid: half-size row j (row), j - h (up), j + h (down) of the

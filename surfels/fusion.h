@@ -171,7 +171,10 @@ class SurfelFusion {
   // One grid row's normals from RowNormals, per grid column: unit, camera frame, facing the
   // camera; has_normal 1 where the neighbours gave one (floats, as the rest: the loop vectorises).
   struct GridRow {
-    explicit GridRow(int columns) : nx(columns), ny(columns), nz(columns), has_normal(columns) {}
+    explicit GridRow(int columns) { Resize(columns); }
+    void Resize(int columns) {
+      for (std::vector<float>* v : {&nx, &ny, &nz, &has_normal}) v->resize(columns);
+    }
     std::vector<float> nx, ny, nz, has_normal;
   };
   FusionStats Fuse(const Measurement& m);
@@ -240,8 +243,8 @@ class SurfelFusion {
   // with their position in the camera and their pixel (y * width + x, -1 when not in
   // the image), and the projected index map (nearest entry per pixel, packed depth and entry).
   std::vector<uint32_t> visible_;
-  Eigen::Matrix3f camera_rotation_ =
-      Eigen::Matrix3f::Identity();  // of this step's camera_from_world
+  // The rotation of this step's camera_from_world.
+  Eigen::Matrix3f camera_rotation_ = Eigen::Matrix3f::Identity();
   std::vector<Eigen::Vector3f> in_camera_;
   // Per entry, its surfel's world normal and radius (set where the surfel is not removed), so that
   // the per-pixel searches read the entries of this step, not the whole map.
