@@ -421,7 +421,8 @@ size_t SurfelFusion::MemoryBytes() const {
          normal_radius_.capacity() * sizeof(Eigen::Vector4f) +
          results_.capacity() * sizeof(PixelResult) +
          (pixel_of_.capacity() + visible_.capacity() + partner_.capacity()) * sizeof(int32_t) +
-         seen_through_.capacity() + entry_flags_.capacity() + chunks_.capacity() * sizeof(Chunk);
+         seen_through_.capacity() + entry_flags_.capacity() +
+         chunks_.capacity() * sizeof(Chunk);
 }
 
 void SurfelFusion::MoveWithKeyframes(const std::vector<SE3>& correction) {

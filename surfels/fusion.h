@@ -225,17 +225,17 @@ class SurfelFusion {
     bool settled = false;  // no unstable surfel at the last full sweep, and untouched since
   };
   std::vector<Chunk> chunks_;
-  std::vector<uint8_t> in_view_;                   // per chunk, in view this step
-  std::vector<size_t> entry_offset_;               // per chunk in view, its first entry
+  std::vector<uint8_t> in_view_;      // per chunk, in view this step
+  std::vector<size_t> entry_offset_;  // per chunk in view, its first entry
   float view_x_[2] = {0, 0}, view_y_[2] = {0, 0};  // the image's extent in x/z and y/z
 
   Camera camera_;
   FusionOptions options_;
-  cv::Mat rays_;  // CV_32FC2: each pixel's ray (x/z, y/z), lens distortion removed
+  cv::Mat rays_;           // CV_32FC2: each pixel's ray (x/z, y/z), lens distortion removed
+  cv::Mat radial_weight_;  // CV_32F: each pixel's weight by its distance from the image centre
   // CV_32F, half size: the ray (x/z, y/z) of the pixel whose depth each cell of the half-size
   // depth holds (the same nearest-pixel resize).
   cv::Mat half_ray_x_, half_ray_y_;
-  cv::Mat radial_weight_;  // CV_32F: each pixel's weight by its distance from the image centre
   SurfelMap map_;
   int frame_ = 0;  // time steps (sensor frames) so far
   int fills_ = 0;  // fills fused so far (their pixel grid offset alternates too)
