@@ -365,7 +365,7 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
       s.confidence = sum;
       s.last_frame = frame_;
       s.keyframe = m.keyframe;
-      Touch(index);
+      TouchGeometry(index);
       ++stats->merged;
     } else {
       Surfel s;
@@ -379,7 +379,7 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
       s.source = static_cast<uint8_t>(res.source);
       map_.Add(s);
       if (chunks_.size() * kChunk < map_.size()) chunks_.emplace_back();
-      Touch(map_.size() - 1);
+      TouchGeometry(map_.size() - 1);
       ++stats->created;
     }
   }

@@ -203,15 +203,25 @@ class SurfelFusion {
   // Sets partner_[e] to the entry that entry e is a copy of (-1: none), for MergeRedundant.
   void FindCopies();
   void KeepWithinBudget(FusionStats* stats);
-  void Touch(size_t surfel) {
+  // A surfel changed: its chunk is no longer settled.
+  void Touch(size_t surfel) { chunks_[surfel / kChunk].settled = false; }
+  // ... and its position or radius may have: the chunk's bounds grow to hold it.
+  void TouchGeometry(size_t surfel) {
     Chunk& chunk = chunks_[surfel / kChunk];
-    chunk.dirty = true;
     chunk.settled = false;
+    if (chunk.dirty) return;  // recomputed from all its surfels before it is next used
+    const Surfel& s = map_[surfel];
+    chunk.lo = chunk.lo.cwiseMin(s.position);
+    chunk.hi = chunk.hi.cwiseMax(s.position);
+    chunk.largest = std::max(chunk.largest, s.radius);
   }
   bool ChunkVisible(size_t chunk, const SE3& camera_from_world);
 
   // Surfels are culled by chunks of kChunk consecutive ones (created together, so close together)
-  // with a bounding sphere, recomputed when a surfel in the chunk changed.
+  // with a bounding sphere: around the box that holds their positions, plus the largest radius.
+  // The box grows as surfels are added or move (TouchGeometry); it is recomputed from the surfels
+  // only when they all moved (a pose-graph correction) or the chunk is new. Removals leave it as
+  // it was: a larger sphere only culls less, and compaction starts the chunks it changed anew.
   static constexpr size_t kChunk = 1024;
   static_assert(SurfelMap::kBlock % kChunk == 0, "a chunk's surfels lie in one block of the map");
   static constexpr uint64_t kEmpty = ~uint64_t{0};  // an index-map pixel no surfel projects to
@@ -219,9 +229,10 @@ class SurfelFusion {
   // the item this many iterations ahead, so that its cache miss overlaps the work in between.
   static constexpr int kPrefetch = 16;
   struct Chunk {
-    Eigen::Vector3f centre = Eigen::Vector3f::Zero();
-    float radius = 0;
-    bool dirty = true;     // the bounding sphere must be recomputed
+    // The box of the positions (lo > hi: none) and the largest radius, world frame.
+    Eigen::Vector3f lo = Eigen::Vector3f::Zero(), hi = Eigen::Vector3f::Zero();
+    float largest = 0;
+    bool dirty = true;     // the bounds must be recomputed from the surfels
     bool settled = false;  // no unstable surfel at the last full sweep, and untouched since
   };
   std::vector<Chunk> chunks_;

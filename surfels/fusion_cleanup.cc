@@ -145,7 +145,7 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
       k.last_frame = d.last_frame;
       k.keyframe = d.keyframe;
     }
-    Touch(keep);
+    TouchGeometry(keep);
     map_.Remove(drop);
     ++stats->redundant;
     ++stats->removed;

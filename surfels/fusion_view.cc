@@ -33,13 +33,13 @@ bool SurfelFusion::ChunkVisible(size_t c, const SE3& camera_from_world) {
       hi = hi.cwiseMax(s.position);
       largest = std::max(largest, s.radius);
     }
-    chunk.centre = 0.5f * (lo + hi);
-    chunk.radius = lo.x() > hi.x() ? -1.f : 0.5f * (hi - lo).norm() + largest;
+    chunk.lo = lo, chunk.hi = hi, chunk.largest = largest;
     chunk.dirty = false;
   }
-  if (chunk.radius < 0) return false;  // all removed
-  const Eigen::Vector3f q = (camera_from_world * chunk.centre.cast<double>()).cast<float>();
-  const float r = chunk.radius;
+  if (chunk.lo.x() > chunk.hi.x()) return false;  // all removed
+  const Eigen::Vector3f centre = 0.5f * (chunk.lo + chunk.hi);
+  const Eigen::Vector3f q = (camera_from_world * centre.cast<double>()).cast<float>();
+  const float r = 0.5f * (chunk.hi - chunk.lo).norm() + chunk.largest;
   if (q.z() + r < options_.min_depth_m * 0.5) return false;
   // Outside one of the four planes through the camera centre and the image's edges.
   // Signed distance of the centre beyond the plane a = slope * z (a: x or y, or their negatives).
