@@ -209,11 +209,7 @@ class SurfelFusion {
   void TouchGeometry(size_t surfel) {
     Chunk& chunk = chunks_[surfel / kChunk];
     chunk.settled = false;
-    if (chunk.dirty) return;  // recomputed from all its surfels before it is next used
-    const Surfel& s = map_[surfel];
-    chunk.lo = chunk.lo.cwiseMin(s.position);
-    chunk.hi = chunk.hi.cwiseMax(s.position);
-    chunk.largest = std::max(chunk.largest, s.radius);
+    if (!chunk.dirty) chunk.Include(map_[surfel]);  // (dirty: recomputed before its next use)
   }
   bool ChunkVisible(size_t chunk, const SE3& camera_from_world);
 
@@ -234,6 +230,12 @@ class SurfelFusion {
     float largest = 0;
     bool dirty = true;     // the bounds must be recomputed from the surfels
     bool settled = false;  // no unstable surfel at the last full sweep, and untouched since
+    // Grows the bounds to hold s.
+    void Include(const Surfel& s) {
+      lo = lo.cwiseMin(s.position);
+      hi = hi.cwiseMax(s.position);
+      largest = std::max(largest, s.radius);
+    }
   };
   std::vector<Chunk> chunks_;
   std::vector<uint8_t> in_view_;      // per chunk, in view this step

@@ -22,18 +22,12 @@ uint64_t Pack(float z, uint32_t index) {
 bool SurfelFusion::ChunkVisible(size_t c, const SE3& camera_from_world) {
   Chunk& chunk = chunks_[c];
   if (chunk.dirty) {
-    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-    Eigen::Vector3f hi = -lo;
-    float largest = 0;
+    chunk.lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());  // empty
+    chunk.hi = -chunk.lo;
+    chunk.largest = 0;
     const size_t end = std::min(map_.size(), (c + 1) * kChunk);
-    for (size_t i = c * kChunk; i < end; ++i) {
-      const Surfel& s = map_[i];
-      if (s.removed()) continue;
-      lo = lo.cwiseMin(s.position);
-      hi = hi.cwiseMax(s.position);
-      largest = std::max(largest, s.radius);
-    }
-    chunk.lo = lo, chunk.hi = hi, chunk.largest = largest;
+    for (size_t i = c * kChunk; i < end; ++i)
+      if (!map_[i].removed()) chunk.Include(map_[i]);
     chunk.dirty = false;
   }
   if (chunk.lo.x() > chunk.hi.x()) return false;  // all removed
