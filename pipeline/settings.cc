@@ -29,7 +29,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PairGeometryOptions, min_baseline_m, epipole_
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PairSelectionOptions, min_matches, max_evaluations,
                                    max_baseline_m, min_median_disparity_px, max_near_disparity_px,
                                    max_near_disparity_sweep_px, allow_forward, max_rotation_deg,
-                                   window, lookahead, spread_third_view_forward, surf, match,
+                                   window, lookahead, spread_third_view_forward,
+                                   mirror_third_view_sideways, surf, match,
                                    refine)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PlaneSweepOptions, window_px, max_planes, max_step_px, min_ncc,
                                    min_uniqueness, min_parallax_px, min_texture, min_window_inside,

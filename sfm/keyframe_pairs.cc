@@ -105,10 +105,25 @@ ScreenedCandidates ScreenCandidates(
   return screened;
 }
 
+// Re-orders [first, last) by the candidates' distance from `point` (world frame, metres): the
+// farthest first, or the nearest.
+void OrderByDistance(const std::vector<std::shared_ptr<const StereoKeyframe>>& candidates,
+                     const Eigen::Vector3d& point, bool farthest_first,
+                     std::vector<CandidateGeometry>::iterator first,
+                     std::vector<CandidateGeometry>::iterator last) {
+  const auto distance = [&](const CandidateGeometry& c) {
+    return (candidates[c.index]->world_from_camera.translation() - point).norm();
+  };
+  std::sort(first, last, [&](const CandidateGeometry& a, const CandidateGeometry& b) {
+    return farthest_first ? distance(a) > distance(b) : distance(a) < distance(b);
+  });
+}
+
 // Refines each screened candidate's pose in turn (farthest first): the first with enough matches
-// is the partner, the next the third view (for a forward partner with spread_third_view_forward,
-// the rest are re-ordered farthest from the partner first). Returns the most inliers among the
-// candidates that fell short.
+// is the partner, the next the third view (the rest re-ordered first: for a forward partner with
+// spread_third_view_forward, farthest from the partner first; for a sideways one with
+// mirror_third_view_sideways, nearest its mirror image through key1 first). Returns the most
+// inliers among the candidates that fell short.
 int ChoosePartnerAndThird(const StereoKeyframe& key1,
                           const std::vector<std::shared_ptr<const StereoKeyframe>>& candidates,
                           const Camera& camera, const PairSelectionOptions& options,
@@ -141,16 +156,13 @@ int ChoosePartnerAndThird(const StereoKeyframe& key1,
     choice->baseline_m = pose.key1_from_key2.TranslationNorm();
     choice->rotation_deg = pose.key1_from_key2.RotationAngle() * kDegPerRad;
     choice->partner_pose = pose;
-    if (g.forward && options.spread_third_view_forward) {
-      const Eigen::Vector3d partner_at = candidates[g.index]->world_from_camera.translation();
-      const auto from_partner = [&](const CandidateGeometry& c) {
-        return (candidates[c.index]->world_from_camera.translation() - partner_at).norm();
-      };
-      std::sort(in_range.begin() + n + 1, in_range.end(),
-                [&](const CandidateGeometry& a, const CandidateGeometry& b) {
-                  return from_partner(a) > from_partner(b);
-                });
-    }
+    // The order in which the remaining candidates are tried as the third view (see the options).
+    const Eigen::Vector3d partner_at = candidates[g.index]->world_from_camera.translation();
+    if (g.forward && options.spread_third_view_forward)
+      OrderByDistance(candidates, partner_at, true, in_range.begin() + n + 1, in_range.end());
+    else if (!g.forward && options.mirror_third_view_sideways)
+      OrderByDistance(candidates, 2 * key1.world_from_camera.translation() - partner_at, false,
+                      in_range.begin() + n + 1, in_range.end());
   }
   return fewest_short;
 }

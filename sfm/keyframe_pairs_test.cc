@@ -115,6 +115,40 @@ TEST_F(KeyframePairs, ForwardPairGetsAThirdViewFarFromThePartner) {
   EXPECT_EQ(next.third, 1);
 }
 
+// Sideways motion along the camera's x axis, two candidates on either side: the partner is the
+// farthest; with mirror_third_view_sideways the third view is the one nearest the partner's mirror
+// image (on the other side, seeing the edge band the partner cannot), without it the next one in
+// order of baseline (the partner's neighbour).
+TEST_F(KeyframePairs, SidewaysPairCanGetAThirdViewOppositeThePartner) {
+  const Camera camera = synth::SynthCamera();
+  const auto across = [&](double metres) {
+    return poses_[10] * SE3::Exp((SE3::Tangent() << metres, 0, 0, 0, 0, 0).finished());
+  };
+  PairSelectionOptions options;
+  const auto key1 = MakeStereoKeyframe(0, Frame(10), poses_[10], camera, options.surf);
+  const std::vector<double> offsets = {-0.10, -0.09, 0.08, 0.05};
+  std::vector<std::shared_ptr<const StereoKeyframe>> candidates;
+  for (size_t i = 0; i < offsets.size(); ++i) {
+    const SE3 pose = across(offsets[i]);
+    const RgbdFrame frame = synth::ToRgbdFrame(
+        synth::RenderFrame(scene_, camera, pose, {}, 5, 40 + static_cast<int>(i)), 40 + i);
+    candidates.push_back(MakeStereoKeyframe(1 + i, frame, pose, camera, options.surf));
+  }
+  ASSERT_FALSE(IsForwardPair(camera, poses_[10].Inverse() * across(-0.10),
+                             options.geometry.epipole_margin_px));
+  const PairChoice next = SelectPartner(*key1, candidates, camera, options);
+  ASSERT_TRUE(next.found) << next.reason;
+  EXPECT_EQ(next.partner, 0) << next.BriefReport();
+  EXPECT_EQ(next.third, 1) << next.BriefReport();
+
+  options.mirror_third_view_sideways = true;
+  const PairChoice mirrored = SelectPartner(*key1, candidates, camera, options);
+  ASSERT_TRUE(mirrored.found) << mirrored.reason;
+  EXPECT_EQ(mirrored.partner, 0);
+  EXPECT_EQ(mirrored.third, 2) << mirrored.BriefReport();
+  EXPECT_TRUE(mirrored.third_pose.success) << mirrored.third_pose.BriefReport();
+}
+
 TEST(PairSelectionOptions, RejectsBadSettings) {
   PairSelectionOptions o;
   EXPECT_TRUE(o.Check());
