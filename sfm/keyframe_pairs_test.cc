@@ -20,6 +20,25 @@ class KeyframePairs : public ::testing::Test {
     return synth::ToRgbdFrame(synth::RenderFrame(scene_, synth::SynthCamera(), poses_[i], {}, 5, i),
                               i);
   }
+  // Stereo keyframes rendered at frame 10's pose moved by each offset (metres) along its camera's
+  // axis `axis` (0: x, sideways; 2: z, forward).
+  std::vector<std::shared_ptr<const StereoKeyframe>> Candidates(const std::vector<double>& offsets,
+                                                                int axis) const {
+    const Camera camera = synth::SynthCamera();
+    std::vector<std::shared_ptr<const StereoKeyframe>> candidates;
+    for (size_t i = 0; i < offsets.size(); ++i) {
+      const SE3 pose = Moved(offsets[i], axis);
+      const RgbdFrame frame = synth::ToRgbdFrame(
+          synth::RenderFrame(scene_, camera, pose, {}, 5, 40 + static_cast<int>(i)), 40 + i);
+      candidates.push_back(MakeStereoKeyframe(1 + i, frame, pose, camera, PairSelectionOptions().surf));
+    }
+    return candidates;
+  }
+  SE3 Moved(double metres, int axis) const {
+    SE3::Tangent step = SE3::Tangent::Zero();
+    step(axis) = metres;
+    return poses_[10] * SE3::Exp(step);
+  }
   synth::Scene scene_;
   std::vector<SE3> poses_;
 };
@@ -87,21 +106,11 @@ TEST_F(KeyframePairs, SchedulerPairsEveryKeyframeWithinTheLimits) {
 // the partner's neighbour behind, which is what it gets without.
 TEST_F(KeyframePairs, ForwardPairGetsAThirdViewFarFromThePartner) {
   const Camera camera = synth::SynthCamera();
-  const auto along_axis = [&](double metres) {
-    return poses_[10] * SE3::Exp((SE3::Tangent() << 0, 0, metres, 0, 0, 0).finished());
-  };
   PairSelectionOptions options;
   const auto key1 = MakeStereoKeyframe(0, Frame(10), poses_[10], camera, options.surf);
-  const std::vector<double> offsets = {-0.16, -0.12, -0.08, 0.06};
-  std::vector<std::shared_ptr<const StereoKeyframe>> candidates;
-  for (size_t i = 0; i < offsets.size(); ++i) {
-    const SE3 pose = along_axis(offsets[i]);
-    const RgbdFrame frame = synth::ToRgbdFrame(
-        synth::RenderFrame(scene_, camera, pose, {}, 5, 40 + static_cast<int>(i)), 40 + i);
-    candidates.push_back(MakeStereoKeyframe(1 + i, frame, pose, camera, options.surf));
-  }
-  ASSERT_TRUE(
-      IsForwardPair(camera, poses_[10].Inverse() * along_axis(-0.16), options.geometry.epipole_margin_px));
+  const auto candidates = Candidates({-0.16, -0.12, -0.08, 0.06}, 2);
+  ASSERT_TRUE(IsForwardPair(camera, poses_[10].Inverse() * Moved(-0.16, 2),
+                            options.geometry.epipole_margin_px));
   const PairChoice spread = SelectPartner(*key1, candidates, camera, options);
   ASSERT_TRUE(spread.found) << spread.reason;
   EXPECT_EQ(spread.partner, 0) << spread.BriefReport();
@@ -121,20 +130,10 @@ TEST_F(KeyframePairs, ForwardPairGetsAThirdViewFarFromThePartner) {
 // order of baseline (the partner's neighbour).
 TEST_F(KeyframePairs, SidewaysPairCanGetAThirdViewOppositeThePartner) {
   const Camera camera = synth::SynthCamera();
-  const auto across = [&](double metres) {
-    return poses_[10] * SE3::Exp((SE3::Tangent() << metres, 0, 0, 0, 0, 0).finished());
-  };
   PairSelectionOptions options;
   const auto key1 = MakeStereoKeyframe(0, Frame(10), poses_[10], camera, options.surf);
-  const std::vector<double> offsets = {-0.10, -0.09, 0.08, 0.05};
-  std::vector<std::shared_ptr<const StereoKeyframe>> candidates;
-  for (size_t i = 0; i < offsets.size(); ++i) {
-    const SE3 pose = across(offsets[i]);
-    const RgbdFrame frame = synth::ToRgbdFrame(
-        synth::RenderFrame(scene_, camera, pose, {}, 5, 40 + static_cast<int>(i)), 40 + i);
-    candidates.push_back(MakeStereoKeyframe(1 + i, frame, pose, camera, options.surf));
-  }
-  ASSERT_FALSE(IsForwardPair(camera, poses_[10].Inverse() * across(-0.10),
+  const auto candidates = Candidates({-0.10, -0.09, 0.08, 0.05}, 0);
+  ASSERT_FALSE(IsForwardPair(camera, poses_[10].Inverse() * Moved(-0.10, 0),
                              options.geometry.epipole_margin_px));
   const PairChoice next = SelectPartner(*key1, candidates, camera, options);
   ASSERT_TRUE(next.found) << next.reason;
