@@ -197,11 +197,13 @@ RectifiedImages RectifyImages(const SgbmRectification& rect, const RgbdFrame& ke
     cv::resize(ValidGrid(camera, r, p, step, fov_r2), *valid, {}, step, step, cv::INTER_NEAREST);
     *valid = (*valid)(cv::Rect(0, 0, size.width, size.height)).clone();
     if (rect.vertical) {  // make epipolar lines horizontal
-      cv::Mat transposed;
-      cv::transpose(*gray_rect, transposed);
-      *gray_rect = transposed;
-      cv::transpose(*valid, transposed);
-      *valid = transposed;
+      // Two destinations: one reused for both would share its buffer with *gray_rect after the
+      // first assignment, and the second transpose would overwrite the image with the mask.
+      cv::Mat gray_t, valid_t;
+      cv::transpose(*gray_rect, gray_t);
+      cv::transpose(*valid, valid_t);
+      *gray_rect = gray_t;
+      *valid = valid_t;
     }
   };
   RectifiedImages out;
