@@ -10,8 +10,9 @@
 // images. The geometry is screened with the tracked poses and the chosen pair's refined pose
 // reported. The next acceptable keyframe after I2 is kept as the third view (photometric check,
 // and a second view for the plane sweep); for a forward pair, the acceptable keyframe farthest
-// from I2, which sees what I2 cannot (spread_third_view_forward); for a sideways pair, optionally
-// the one nearest I2's mirror image through I1 (mirror_third_view_sideways).
+// from I2, which sees what I2 cannot (spread_third_view_forward); for a sideways pair, the one
+// nearest I2's mirror image through I1, which sees the edge band that I2 cannot
+// (mirror_third_view_sideways).
 //
 // KeyframePairScheduler decides when a keyframe is ready: candidates are the `window` keyframes
 // before it and the `lookahead` keyframes after it, so a keyframe's pair is chosen once
@@ -62,11 +63,9 @@ struct PairSelectionOptions {
   // The third view of a sideways pair (the photometric check's view and the sweep's second view
   // after SGBM): the acceptable candidate nearest the partner's mirror image through keyframe 1
   // (true), which sees the band along keyframe 1's edge that the partner cannot; or the next one
-  // after the partner in order of baseline (false), usually on the partner's side. Off by
-  // default: it fills more of the real and synthetic sideways captures, but on synthetic vertical
-  // and diagonal ones it also fills more clear glass at the glass's own depth
+  // after the partner in order of baseline (false), usually on the partner's side
   // (docs/experiments/2026-12-03-mirrored-third-view.md).
-  bool mirror_third_view_sideways = false;
+  bool mirror_third_view_sideways = true;
   SurfOptions surf = [] {
     SurfOptions s;
     s.upright = true;

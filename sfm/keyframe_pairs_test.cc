@@ -135,6 +135,7 @@ TEST_F(KeyframePairs, SidewaysPairCanGetAThirdViewOppositeThePartner) {
   const auto candidates = Candidates({-0.10, -0.09, 0.08, 0.05}, 0);
   ASSERT_FALSE(IsForwardPair(camera, poses_[10].Inverse() * Moved(-0.10, 0),
                              options.geometry.epipole_margin_px));
+  options.mirror_third_view_sideways = false;
   const PairChoice next = SelectPartner(*key1, candidates, camera, options);
   ASSERT_TRUE(next.found) << next.reason;
   EXPECT_EQ(next.partner, 0) << next.BriefReport();
