@@ -30,7 +30,8 @@ class KeyframePairs : public ::testing::Test {
       const SE3 pose = Moved(offsets[i], axis);
       const RgbdFrame frame = synth::ToRgbdFrame(
           synth::RenderFrame(scene_, camera, pose, {}, 5, 40 + static_cast<int>(i)), 40 + i);
-      candidates.push_back(MakeStereoKeyframe(1 + i, frame, pose, camera, PairSelectionOptions().surf));
+      candidates.push_back(
+          MakeStereoKeyframe(1 + i, frame, pose, camera, PairSelectionOptions().surf));
     }
     return candidates;
   }
