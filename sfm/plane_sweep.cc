@@ -40,7 +40,7 @@ std::string PlaneSweepResult::BriefReport() const {
 namespace {
 
 using sweep_detail::AccumulateCorrelation;
-using sweep_detail::AggregatePath;
+using sweep_detail::AggregatePass;
 using sweep_detail::CostRow;
 using sweep_detail::GrayFloat;
 using sweep_detail::kUncovered;
@@ -314,9 +314,8 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
   std::vector<uint16_t> total;
   if (options.smooth_large > 0) {
     total.assign(cost.size(), 0);
-    for (const auto& [dx, dy] : std::vector<std::pair<int, int>>{
-             {1, 0}, {-1, 0}, {0, 1}, {0, -1}, {1, 1}, {-1, 1}, {1, -1}, {-1, -1}})
-      AggregatePath(cost, w.roi.height, w.roi.width, planes, dx, dy, options.smooth_small,
+    for (bool forward : {true, false})
+      AggregatePass(cost, w.roi.height, w.roi.width, planes, forward, options.smooth_small,
                     options.smooth_large, &total);
   } else {
     total.assign(cost.begin(), cost.end());

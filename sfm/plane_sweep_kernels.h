@@ -118,13 +118,27 @@ GF_VECTOR_CLONES inline void CostRow(const float* __restrict sum, const float* _
 // is not finite: -1, outside every image.
 GF_VECTOR_CLONES inline void SamplePositions(const float* h, bool finite, int y, int n,
                                       float* __restrict u, float* __restrict v) {
+  if (!finite) {
+    std::fill(u, u + n, -1.f);
+    std::fill(v, v + n, -1.f);
+    return;
+  }
   const float bx = h[1] * y + h[2], by = h[4] * y + h[5], bz = h[7] * y + h[8];
+  const float ax = h[0], ay = h[3], az = h[6];
+  // Every pixel divides, with no condition, so that the loop vectorises (a comparison in it would
+  // not, under IEEE trapping rules); pixels behind the camera are overwritten below.
   for (int x = 0; x < n; ++x) {
-    const float qz = bz + h[6] * x;
-    const bool ahead = qz > 1e-9f && finite;
-    const float inv = ahead ? 1.f / qz : 0.f;
-    u[x] = ahead ? (bx + h[0] * x) * inv : -1.f;
-    v[x] = ahead ? (by + h[3] * x) * inv : -1.f;
+    const float inv = 1.f / (bz + az * x);
+    u[x] = (bx + ax * x) * inv;
+    v[x] = (by + ay * x) * inv;
+  }
+  // The depth bz + az x is monotonic in x (float rounding keeps that), so the pixels behind the
+  // camera lie at one end of the row: mark them from that end.
+  const auto behind = [&](int x) { return !(bz + az * x > 1e-9f); };
+  if (az >= 0.f) {
+    for (int x = 0; x < n && behind(x); ++x) u[x] = v[x] = -1.f;
+  } else {
+    for (int x = n - 1; x >= 0 && behind(x); --x) u[x] = v[x] = -1.f;
   }
 }
 
@@ -271,46 +285,80 @@ class WindowSums {
 // Cost volume entries: 100 * (1 - mean NCC) in [0, 200]; textureless_cost where keyframe 1's
 // window is flat or no view sees it (neutral: aggregation then carries the neighbours' evidence).
 
-// One path of semi-global aggregation (Hirschmueller 2008) over cost[rows][cols][planes], added
-// into sum: L(p, d) = C(p, d) + min(L(q, d), L(q, d +- 1) + p1, min_k L(q, k) + p2) - min_k L(q, k)
-// with q the predecessor of p along (dx, dy). Rows are visited in the path's vertical direction,
-// so a predecessor is either earlier in the same row (dy = 0) or in the previous row.
-GF_VECTOR_CLONES inline void AggregatePath(const std::vector<uint8_t>& cost, int rows, int cols,
-                                    int planes, int dx, int dy, int p1, int p2,
-                                    std::vector<uint16_t>* sum) {
-  // Each pixel's L row is padded with one large entry on either side, so that the d - 1 and
-  // d + 1 neighbours need no bounds checks (and the loop vectorises).
+// One step of semi-global aggregation (Hirschmueller 2008) along a path, at pixel p with matching
+// costs c: L(p, d) = C(p, d) + min(L(q, d), L(q, d +- 1) + p1, min_k L(q, k) + p2) - min_k L(q, k),
+// q being p's predecessor on the path (its L in q, padded with one large entry on either side so
+// that d - 1 and d + 1 need no bounds checks; null at the path's start: L = C). Writes L(p, .)
+// to l and returns its minimum.
+// (Inlined into AggregatePass, whose clones vectorise it.)
+inline uint16_t PathStep(const uint8_t* __restrict c, const uint16_t* __restrict q, uint16_t q_min,
+                         int planes, int p1, int p2, uint16_t* __restrict l) {
+  uint16_t lowest = 0xffff;
+  if (q == nullptr) {
+    for (int d = 0; d < planes; ++d) {
+      l[d] = c[d];
+      lowest = std::min(lowest, l[d]);
+    }
+    return lowest;
+  }
+  const uint16_t jump = static_cast<uint16_t>(q_min + p2), small = static_cast<uint16_t>(p1);
+  for (int d = 0; d < planes; ++d) {
+    uint16_t v = std::min(q[d], jump);
+    v = std::min(v, static_cast<uint16_t>(std::min(q[d - 1], q[d + 1]) + small));
+    l[d] = static_cast<uint16_t>(c[d] + v - q_min);
+    lowest = std::min(lowest, l[d]);
+  }
+  return lowest;
+}
+
+// sum[d] += a[d] + b[d] + e[d] + f[d] for d < n (vectorises; wraps as uint16 does).
+inline void AddFour(const uint16_t* __restrict a, const uint16_t* __restrict b,
+                    const uint16_t* __restrict e, const uint16_t* __restrict f, int n,
+                    uint16_t* __restrict sum) {
+  for (int d = 0; d < n; ++d) sum[d] = static_cast<uint16_t>(sum[d] + a[d] + b[d] + e[d] + f[d]);
+}
+
+// Half of semi-global aggregation over cost[rows][cols][planes], added into sum: the four paths
+// whose predecessors come before each pixel in one scan of the image. Forward (rows top to bottom,
+// each left to right): paths (dx, dy) = (1, 0), (0, 1), (1, 1), (-1, 1); backward: the opposite
+// four. Two passes give the 8 paths while reading the cost volume and the sums twice, not 8 times.
+GF_VECTOR_CLONES inline void AggregatePass(const std::vector<uint8_t>& cost, int rows, int cols,
+                                           int planes, bool forward, int p1, int p2,
+                                           std::vector<uint16_t>* sum) {
   const size_t stride = static_cast<size_t>(planes) + 2;
   constexpr uint16_t kPad = 0x3fff;
-  std::vector<uint16_t> previous(cols * stride, kPad), current(cols * stride, kPad);
-  std::vector<uint16_t> previous_min(cols), current_min(cols);
+  // Per pixel of a row, the L of the three paths that come from the previous row (straight down
+  // the columns, and the two diagonals), for the previous row and the current one; and the L of
+  // the path along the row at the previous pixel and the current one. Pads stay at kPad.
+  const size_t row_values = 3 * static_cast<size_t>(cols) * stride;
+  std::vector<uint16_t> previous(row_values, kPad), current(row_values, kPad);
+  std::vector<uint16_t> previous_min(3 * static_cast<size_t>(cols)), current_min(previous_min);
+  std::vector<uint16_t> along(2 * stride, kPad);
+  const int s = forward ? 1 : -1;
+  auto at = [&](std::vector<uint16_t>& rows_l, int path, int x) {
+    return &rows_l[(static_cast<size_t>(x) * 3 + path) * stride + 1];
+  };
   for (int i = 0; i < rows; ++i) {
-    const int y = dy >= 0 ? i : rows - 1 - i;
+    const int y = forward ? i : rows - 1 - i;
+    uint16_t along_min = 0;
     for (int j = 0; j < cols; ++j) {
-      const int x = dx >= 0 ? j : cols - 1 - j;
-      const uint8_t* __restrict c = &cost[(static_cast<size_t>(y) * cols + x) * planes];
-      uint16_t* __restrict l = &current[x * stride + 1];
-      uint16_t* __restrict s = &(*sum)[(static_cast<size_t>(y) * cols + x) * planes];
-      const int px = x - dx, py = y - dy;
-      uint16_t lowest = kPad;
-      if (px < 0 || px >= cols || py < 0 || py >= rows) {
-        for (int d = 0; d < planes; ++d) l[d] = c[d];
-      } else {
-        const uint16_t* __restrict q =
-            dy == 0 ? &current[px * stride + 1] : &previous[px * stride + 1];
-        const uint16_t q_min = dy == 0 ? current_min[px] : previous_min[px];
-        const uint16_t jump = static_cast<uint16_t>(q_min + p2), small = static_cast<uint16_t>(p1);
-        for (int d = 0; d < planes; ++d) {
-          uint16_t v = std::min(q[d], jump);
-          v = std::min(v, static_cast<uint16_t>(std::min(q[d - 1], q[d + 1]) + small));
-          l[d] = static_cast<uint16_t>(c[d] + v - q_min);
-        }
+      const int x = forward ? j : cols - 1 - j;
+      const size_t p = static_cast<size_t>(y) * cols + x;
+      const uint8_t* c = &cost[p * planes];
+      uint16_t* l_along = &along[(j % 2) * stride + 1];
+      const uint16_t* q_along = j > 0 ? &along[((j + 1) % 2) * stride + 1] : nullptr;
+      along_min = PathStep(c, q_along, along_min, planes, p1, p2, l_along);
+      // From the previous row: straight (path 0), from x - s (path 1) and from x + s (path 2).
+      for (int path = 0; path < 3; ++path) {
+        const int qx = x - s * (path == 1) + s * (path == 2);
+        const bool has = i > 0 && qx >= 0 && qx < cols;
+        const uint16_t q_min = has ? previous_min[static_cast<size_t>(qx) * 3 + path] : 0;
+        current_min[static_cast<size_t>(x) * 3 + path] =
+            PathStep(c, has ? at(previous, path, qx) : nullptr, q_min, planes, p1, p2,
+                     at(current, path, x));
       }
-      for (int d = 0; d < planes; ++d) {
-        lowest = std::min(lowest, l[d]);
-        s[d] = static_cast<uint16_t>(s[d] + l[d]);
-      }
-      current_min[x] = lowest;
+      AddFour(l_along, at(current, 0, x), at(current, 1, x), at(current, 2, x), planes,
+              &(*sum)[p * planes]);
     }
     std::swap(previous, current);
     std::swap(previous_min, current_min);
