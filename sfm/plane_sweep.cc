@@ -44,7 +44,6 @@ using sweep_detail::AggregatePass;
 using sweep_detail::CostRow;
 using sweep_detail::GrayFloat;
 using sweep_detail::kUncovered;
-using sweep_detail::SelectWindows;
 using sweep_detail::ViewData;
 using sweep_detail::WindowSums;
 
@@ -179,7 +178,7 @@ std::vector<uint8_t> CostVolume(const SweepWork& w, int planes, double w_far, do
   cv::Mat sum(rows, cols, CV_32F), count(rows, cols, CV_32F), seen(rows, cols, CV_32F);
   const bool hole_windows = w.hole_windows();
   WindowSums window_sums(rows, cols, options.window_px, hole_windows);
-  std::vector<float> selected(hole_windows ? 4 * cols : 0), row_cost(cols);
+  std::vector<float> row_cost(cols);
   const float inv_area = 1.f / (options.window_px * options.window_px);
   const float min_var = static_cast<float>(options.min_texture * options.min_texture);
   const float min_inside = static_cast<float>(options.min_window_inside);
@@ -199,14 +198,11 @@ std::vector<uint8_t> CostVolume(const SweepWork& w, int planes, double w_far, do
       // Correlation over keyframe 1's covered pixels of each window.
       window_sums.Run(v, w.k * h * w.k_inv * shift, w.i_roi, w.c_roi, w.h_roi,
                       [&](int y, const float* m) {
-                        if (hole_windows) {
-                          SelectWindows(m, w.use_hole.ptr<float>(y), cols, selected.data());
-                          m = selected.data();
-                        }
-                        AccumulateCorrelation(m, cols, inv_area, min_inside, min_var,
-                                              w.n1.ptr<float>(y), w.mean_i.ptr<float>(y),
-                                              w.var_i.ptr<float>(y), sum.ptr<float>(y),
-                                              count.ptr<float>(y), seen.ptr<float>(y));
+                        AccumulateCorrelation(
+                            m, hole_windows ? w.use_hole.ptr<float>(y) : nullptr, cols, inv_area,
+                            min_inside, min_var, w.n1.ptr<float>(y), w.mean_i.ptr<float>(y),
+                            w.var_i.ptr<float>(y), sum.ptr<float>(y), count.ptr<float>(y),
+                            seen.ptr<float>(y));
                       });
     }
     uint8_t* plane_cost = &block[static_cast<size_t>(plane % kBlock) * pixels];

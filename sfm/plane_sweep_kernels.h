@@ -22,6 +22,14 @@ namespace gf::sweep_detail {
 #define GF_VECTOR_CLONES
 #endif
 
+// Helpers of those loops, inlined into them wherever they are called (so that the clones
+// vectorise them), whatever GCC's inlining heuristics think of their size.
+#if defined(__GNUC__)
+#define GF_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define GF_ALWAYS_INLINE inline
+#endif
+
 inline cv::Mat GrayFloat(const cv::Mat& bgr) {
   cv::Mat gray, f;
   cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
@@ -66,29 +74,48 @@ GF_VECTOR_CLONES inline void SumWindows(const float* in, size_t step, int count,
   }
 }
 
-// One row of one view's correlation with keyframe 1, from the window sums m (4 channels of n
-// values, as WindowSums gives them): where the view covers every pixel of the window that keyframe
-// 1 covers, seen counts up; where both windows also have texture, sum gains the NCC and count one.
-// Branch-free, so that it vectorises. window_inside: keyframe 1's coverage mean per window;
-// mean_i, var_i: its grey level's.
-GF_VECTOR_CLONES inline void AccumulateCorrelation(const float* m, int n, float inv_area, float min_inside,
-                                            float min_var, const float* window_inside,
-                                            const float* mean_i, const float* var_i,
-                                            float* __restrict sum, float* __restrict count,
-                                            float* __restrict seen) {
+// One pixel's correlation of one view with keyframe 1 from its window sums (m_jc, m_jj, m_ji, m_c
+// as WindowSums gives them): where the view covers every pixel of the window that keyframe 1
+// covers, seen counts up; where both windows also have texture, sum gains the NCC and count one.
+// Branch-free, so that the loops calling it vectorise. inside_x: keyframe 1's coverage mean of the
+// window; mean_i, var_i: its grey level's.
+GF_ALWAYS_INLINE void CorrelationStep(float m_jc, float m_jj, float m_ji, float m_c, float inv_area,
+                            float min_inside, float min_var, float inside_x, float mean_i,
+                            float var_i, float* sum, float* count, float* seen) {
+  const int inside = (inside_x >= min_inside) & (m_c * inv_area >= inside_x - 1e-3f);
+  const float inv_n = inv_area / inside_x;
+  const float mj = m_jc * inv_n;
+  const float vj = m_jj * inv_n - mj * mj;
+  const int textured = inside & (vj > min_var) & (var_i > min_var);
+  const float ncc = (m_ji * inv_n - mean_i * mj) / std::sqrt(std::max(var_i * vj, 1e-12f));
+  *seen += static_cast<float>(inside);
+  *sum += ncc * static_cast<float>(textured);
+  *count += static_cast<float>(textured);
+}
+
+// One row of one view's correlation with keyframe 1 (CorrelationStep per pixel) from the window
+// sums m (4 channels of n values; with use_hole, 8: the full windows' then the hole windows'),
+// taking the hole windows' sums where use_hole is 1 (it is 0 or 1; a blend, so that it
+// vectorises). window_inside, mean_i, var_i: keyframe 1's window statistics.
+GF_VECTOR_CLONES inline void AccumulateCorrelation(const float* m, const float* use_hole, int n,
+                                                   float inv_area, float min_inside, float min_var,
+                                                   const float* window_inside, const float* mean_i,
+                                                   const float* var_i, float* __restrict sum,
+                                                   float* __restrict count,
+                                                   float* __restrict seen) {
   const float *m_jc = m, *m_jj = m + n, *m_ji = m + 2 * n, *m_c = m + 3 * n;
+  if (use_hole == nullptr) {
+    for (int x = 0; x < n; ++x)
+      CorrelationStep(m_jc[x], m_jj[x], m_ji[x], m_c[x], inv_area, min_inside, min_var,
+                      window_inside[x], mean_i[x], var_i[x], &sum[x], &count[x], &seen[x]);
+    return;
+  }
+  const float *h_jc = m + 4 * n, *h_jj = m + 5 * n, *h_ji = m + 6 * n, *h_c = m + 7 * n;
   for (int x = 0; x < n; ++x) {
-    const float inside_x = window_inside[x];
-    const int inside = (inside_x >= min_inside) & (m_c[x] * inv_area >= inside_x - 1e-3f);
-    const float inv_n = inv_area / inside_x;
-    const float mj = m_jc[x] * inv_n;
-    const float vj = m_jj[x] * inv_n - mj * mj;
-    const int textured = inside & (vj > min_var) & (var_i[x] > min_var);
-    const float ncc =
-        (m_ji[x] * inv_n - mean_i[x] * mj) / std::sqrt(std::max(var_i[x] * vj, 1e-12f));
-    seen[x] += static_cast<float>(inside);
-    sum[x] += ncc * static_cast<float>(textured);
-    count[x] += static_cast<float>(textured);
+    const float a = use_hole[x], b = 1.f - use_hole[x];
+    CorrelationStep(a * h_jc[x] + b * m_jc[x], a * h_jj[x] + b * m_jj[x],
+                    a * h_ji[x] + b * m_ji[x], a * h_c[x] + b * m_c[x], inv_area, min_inside,
+                    min_var, window_inside[x], mean_i[x], var_i[x], &sum[x], &count[x], &seen[x]);
   }
 }
 
@@ -191,22 +218,14 @@ GF_VECTOR_CLONES inline void WeightByHoles(const float* __restrict h, int n, siz
   }
 }
 
-// Per pixel, the hole channels (4..7 of m) where use_hole is 1, else the full ones (0..3) (use_hole
-// is 0 or 1): out holds 4 channels of n values. Arithmetic, so that it vectorises.
-GF_VECTOR_CLONES inline void SelectWindows(const float* __restrict m, const float* __restrict use_hole,
-                                    int n, float* __restrict out) {
-  for (int c = 0; c < 4; ++c) {
-    const float* full = m + static_cast<size_t>(c) * n;
-    const float* hole = m + static_cast<size_t>(c + 4) * n;
-    float* o = out + static_cast<size_t>(c) * n;
-    for (int x = 0; x < n; ++x) o[x] = use_hole[x] * hole[x] + (1.f - use_hole[x]) * full[x];
+// Running window sums move down a row: sum[i] = sum[i] - leaving[i] + entering[i], then the
+// entering row takes the leaving one's place in the ring (vectorises).
+GF_VECTOR_CLONES inline void Slide(const float* __restrict entering, size_t n,
+                                   float* __restrict leaving, float* __restrict sum) {
+  for (size_t i = 0; i < n; ++i) {
+    sum[i] = sum[i] - leaving[i] + entering[i];
+    leaving[i] = entering[i];
   }
-}
-
-// sum[i] += sign * row[i] for i < n (vectorises).
-GF_VECTOR_CLONES inline void Accumulate(const float* __restrict row, size_t n, float sign,
-                                 float* __restrict sum) {
-  for (size_t i = 0; i < n; ++i) sum[i] += sign * row[i];
 }
 
 // Window sums of one view's warped grey level J for a plane, one output row at a time: J is
@@ -227,6 +246,7 @@ class WindowSums {
         padded_(cols + 2 * (window / 2)),
         sample_(static_cast<size_t>(channels_) * padded_, 0.f),
         ring_(static_cast<size_t>(window) * channels_ * cols, 0.f),
+        entering_(static_cast<size_t>(channels_) * cols),
         sums_(static_cast<size_t>(channels_) * cols),
         u_(cols),
         v_(cols) {}
@@ -248,7 +268,9 @@ class WindowSums {
       float* slot = &ring_[static_cast<size_t>(y % window_) * row_values];
       const int out_row = y - half_;
       const bool exact = out_row % kExactEvery == 0;  // direct sums this row, else running ones
-      if (!exact) Accumulate(slot, row_values, -1.f, sums_.data());
+      // The entering row's horizontal sums: straight into the ring on exact rows; else beside
+      // it, until Slide has subtracted the leaving row.
+      float* entering = exact ? slot : entering_.data();
       if (y < rows_) {
         SamplePositions(h, finite, y, cols_, u_.data(), v_.data());
         float* jc = &sample_[half_];
@@ -257,15 +279,15 @@ class WindowSums {
         if (channels_ == 8) WeightByHoles(h_roi.ptr<float>(y), cols_, padded_, jc);
         for (int c = 0; c < channels_; ++c)
           SumWindows(&sample_[static_cast<size_t>(c) * padded_], 1, window_, cols_,
-                     slot + static_cast<size_t>(c) * cols_);
+                     entering + static_cast<size_t>(c) * cols_);
       } else {
-        std::fill(slot, slot + row_values, 0.f);
+        std::fill(entering, entering + row_values, 0.f);
       }
       // The ring holds rows out_row - half .. out_row + half (in rotated order).
       if (exact)
         SumWindows(ring_.data(), row_values, window_, static_cast<int>(row_values), sums_.data());
       else
-        Accumulate(slot, row_values, 1.f, sums_.data());
+        Slide(entering, row_values, slot, sums_.data());
       if (out_row < 0) continue;
       row_done(out_row, sums_.data());
     }
@@ -279,6 +301,7 @@ class WindowSums {
   size_t padded_;
   std::vector<float> sample_;  // the channels of one ROI row, padded by half a window each side
   std::vector<float> ring_;    // the last `window` rows' horizontal sums, all channels
+  std::vector<float> entering_;  // the entering row's horizontal sums (rows summed by Slide)
   std::vector<float> sums_, u_, v_;
 };
 
@@ -290,8 +313,7 @@ class WindowSums {
 // q being p's predecessor on the path (its L in q, padded with one large entry on either side so
 // that d - 1 and d + 1 need no bounds checks; null at the path's start: L = C). Writes L(p, .)
 // to l and returns its minimum.
-// (Inlined into AggregatePass, whose clones vectorise it.)
-inline uint16_t PathStep(const uint8_t* __restrict c, const uint16_t* __restrict q, uint16_t q_min,
+GF_ALWAYS_INLINE uint16_t PathStep(const uint8_t* __restrict c, const uint16_t* __restrict q, uint16_t q_min,
                          int planes, int p1, int p2, uint16_t* __restrict l) {
   uint16_t lowest = 0xffff;
   if (q == nullptr) {
@@ -312,7 +334,7 @@ inline uint16_t PathStep(const uint8_t* __restrict c, const uint16_t* __restrict
 }
 
 // sum[d] += a[d] + b[d] + e[d] + f[d] for d < n (vectorises; wraps as uint16 does).
-inline void AddFour(const uint16_t* __restrict a, const uint16_t* __restrict b,
+GF_ALWAYS_INLINE void AddFour(const uint16_t* __restrict a, const uint16_t* __restrict b,
                     const uint16_t* __restrict e, const uint16_t* __restrict f, int n,
                     uint16_t* __restrict sum) {
   for (int d = 0; d < n; ++d) sum[d] = static_cast<uint16_t>(sum[d] + a[d] + b[d] + e[d] + f[d]);
