@@ -13,7 +13,6 @@
 
 namespace gf {
 
-
 bool PlaneSweepOptions::Check(std::string* message) const {
   if (window_px < 3 || window_px % 2 == 0 || max_planes < 3 || max_planes > 250 ||
       !(max_step_px > 0) || !(min_ncc > -1 && min_ncc < 1) ||
@@ -42,8 +41,10 @@ namespace {
 using sweep_detail::AccumulateCorrelation;
 using sweep_detail::AggregatePass;
 using sweep_detail::CostRow;
+using sweep_detail::FirstMinimum;
 using sweep_detail::GrayFloat;
 using sweep_detail::kUncovered;
+using sweep_detail::Minimum;
 using sweep_detail::ViewData;
 using sweep_detail::WindowSums;
 
@@ -57,9 +58,9 @@ struct SweepWork {
   std::vector<ViewData> views;
   double max_baseline = 0;
   cv::Rect roi;
-  cv::Mat i_roi, c_roi, h_roi;   // grey level, coverage and hole weight in the roi
-  cv::Mat n1, mean_i, var_i;     // keyframe 1's window share, mean and variance
-  cv::Mat use_hole;              // 1 where a hole pixel's window uses hole pixels only
+  cv::Mat i_roi, c_roi, h_roi;  // grey level, coverage and hole weight in the roi
+  cv::Mat n1, mean_i, var_i;    // keyframe 1's window share, mean and variance
+  cv::Mat use_hole;             // 1 where a hole pixel's window uses hole pixels only
   bool hole_windows() const { return !use_hole.empty(); }
 };
 
@@ -196,14 +197,13 @@ std::vector<uint8_t> CostVolume(const SweepWork& w, int planes, double w_far, do
       Eigen::Matrix3d h = v.rotation;
       h.col(2) += v.translation * inverse_depth;  // R + t n^T / z with n = (0, 0, 1)
       // Correlation over keyframe 1's covered pixels of each window.
-      window_sums.Run(v, w.k * h * w.k_inv * shift, w.i_roi, w.c_roi, w.h_roi,
-                      [&](int y, const float* m) {
-                        AccumulateCorrelation(
-                            m, hole_windows ? w.use_hole.ptr<float>(y) : nullptr, cols, inv_area,
-                            min_inside, min_var, w.n1.ptr<float>(y), w.mean_i.ptr<float>(y),
-                            w.var_i.ptr<float>(y), sum.ptr<float>(y), count.ptr<float>(y),
-                            seen.ptr<float>(y));
-                      });
+      window_sums.Run(
+          v, w.k * h * w.k_inv * shift, w.i_roi, w.c_roi, w.h_roi, [&](int y, const float* m) {
+            AccumulateCorrelation(m, hole_windows ? w.use_hole.ptr<float>(y) : nullptr, cols,
+                                  inv_area, min_inside, min_var, w.n1.ptr<float>(y),
+                                  w.mean_i.ptr<float>(y), w.var_i.ptr<float>(y), sum.ptr<float>(y),
+                                  count.ptr<float>(y), seen.ptr<float>(y));
+          });
     }
     uint8_t* plane_cost = &block[static_cast<size_t>(plane % kBlock) * pixels];
     for (int y = 0; y < rows; ++y) {
@@ -257,14 +257,15 @@ void SelectDepths(const SweepWork& w, const std::vector<uint8_t>& cost,
       if (!r[x]) continue;
       const size_t base = (static_cast<size_t>(y) * cols + x) * planes;
       const uint16_t* t = &total[base];
-      const int bk = static_cast<int>(std::min_element(t, t + planes) - t);
+      const int bk = FirstMinimum(t, planes);
       const uint8_t c = cost[base + bk];
       // Flat windows carry no evidence of their own; aggregation would only copy a neighbour's
       // depth into them (across occlusion edges too), so they get none.
       if (!(vi[x] > min_var) || c > 100.0 * (1.0 - options.min_ncc)) continue;
-      int others = std::numeric_limits<int>::max();
-      for (int d = 0; d < planes; ++d)
-        if (std::abs(d - bk) > 1) others = std::min<int>(others, t[d]);
+      // The least cost more than one plane away from the best.
+      const int after = std::min(bk + 2, planes);
+      const int others =
+          std::min(Minimum(t, std::max(bk - 1, 0)), Minimum(t + after, planes - after));
       if (t[bk] > (1.0 - options.min_uniqueness) * others) continue;
       double offset = 0;
       if (bk > 0 && bk + 1 < planes) {

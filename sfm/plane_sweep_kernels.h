@@ -57,7 +57,8 @@ inline void SumFixed(const float* __restrict in, size_t step, int n, float* __re
     out[x] = a;
   }
 }
-GF_VECTOR_CLONES inline void SumWindows(const float* in, size_t step, int count, int n, float* out) {
+GF_VECTOR_CLONES inline void SumWindows(const float* in, size_t step, int count, int n,
+                                        float* out) {
   switch (count) {
     case 3:
       return SumFixed<3>(in, step, n, out);
@@ -80,8 +81,8 @@ GF_VECTOR_CLONES inline void SumWindows(const float* in, size_t step, int count,
 // Branch-free, so that the loops calling it vectorise. inside_x: keyframe 1's coverage mean of the
 // window; mean_i, var_i: its grey level's.
 GF_ALWAYS_INLINE void CorrelationStep(float m_jc, float m_jj, float m_ji, float m_c, float inv_area,
-                            float min_inside, float min_var, float inside_x, float mean_i,
-                            float var_i, float* sum, float* count, float* seen) {
+                                      float min_inside, float min_var, float inside_x, float mean_i,
+                                      float var_i, float* sum, float* count, float* seen) {
   const int inside = (inside_x >= min_inside) & (m_c * inv_area >= inside_x - 1e-3f);
   const float inv_n = inv_area / inside_x;
   const float mj = m_jc * inv_n;
@@ -113,9 +114,9 @@ GF_VECTOR_CLONES inline void AccumulateCorrelation(const float* m, const float* 
   const float *h_jc = m + 4 * n, *h_jj = m + 5 * n, *h_ji = m + 6 * n, *h_c = m + 7 * n;
   for (int x = 0; x < n; ++x) {
     const float a = use_hole[x], b = 1.f - use_hole[x];
-    CorrelationStep(a * h_jc[x] + b * m_jc[x], a * h_jj[x] + b * m_jj[x],
-                    a * h_ji[x] + b * m_ji[x], a * h_c[x] + b * m_c[x], inv_area, min_inside,
-                    min_var, window_inside[x], mean_i[x], var_i[x], &sum[x], &count[x], &seen[x]);
+    CorrelationStep(a * h_jc[x] + b * m_jc[x], a * h_jj[x] + b * m_jj[x], a * h_ji[x] + b * m_ji[x],
+                    a * h_c[x] + b * m_c[x], inv_area, min_inside, min_var, window_inside[x],
+                    mean_i[x], var_i[x], &sum[x], &count[x], &seen[x]);
   }
 }
 
@@ -125,8 +126,9 @@ GF_VECTOR_CLONES inline void AccumulateCorrelation(const float* m, const float* 
 // every view (no match); else 100 (1 - mean NCC), plus 0.5 (so that truncation rounds). Branch-free
 // (a clamp here would not vectorise: the caller clamps).
 GF_VECTOR_CLONES inline void CostRow(const float* __restrict sum, const float* __restrict count,
-                              const float* __restrict var_i, const float* __restrict seen, int n,
-                              float min_var, float textureless_cost, float* __restrict out) {
+                                     const float* __restrict var_i, const float* __restrict seen,
+                                     int n, float min_var, float textureless_cost,
+                                     float* __restrict out) {
   for (int x = 0; x < n; ++x) {
     // No textured view (count 0, so sum 0): 100. (A ternary: std::max would not vectorise.)
     const float views = count[x] < 1.f ? 1.f : count[x];
@@ -144,7 +146,7 @@ GF_VECTOR_CLONES inline void CostRow(const float* __restrict sum, const float* _
 // homography is affine along a row up to the division. Behind the camera, or with a homography that
 // is not finite: -1, outside every image.
 GF_VECTOR_CLONES inline void SamplePositions(const float* h, bool finite, int y, int n,
-                                      float* __restrict u, float* __restrict v) {
+                                             float* __restrict u, float* __restrict v) {
   if (!finite) {
     std::fill(u, u + n, -1.f);
     std::fill(v, v + n, -1.f);
@@ -174,10 +176,10 @@ GF_VECTOR_CLONES inline void SamplePositions(const float* h, bool finite, int y,
 // image, else 0 and uncovered; then the products the window sums need, weighted by keyframe 1's
 // coverage c1 (i1: its grey level). Branch-free, so that it vectorises (gathers).
 GF_VECTOR_CLONES inline void SampleRow(const ViewData& view, const float* __restrict u_in,
-                                const float* __restrict v_in, int n, const float* __restrict i1,
-                                const float* __restrict c1, float* __restrict jc,
-                                float* __restrict jj, float* __restrict ji,
-                                float* __restrict covered) {
+                                       const float* __restrict v_in, int n,
+                                       const float* __restrict i1, const float* __restrict c1,
+                                       float* __restrict jc, float* __restrict jj,
+                                       float* __restrict ji, float* __restrict covered) {
   const int width = view.gray.cols;
   // Largest positions whose 2x2 neighbourhood is inside: just below the last row and column.
   const float max_u = std::nextafter(static_cast<float>(width - 1), 0.f),
@@ -210,7 +212,7 @@ GF_VECTOR_CLONES inline void SampleRow(const ViewData& view, const float* __rest
 // The hole channels of a sampled row: the four channels (each `padded` apart) weighted by the
 // hole share h of keyframe 1's coverage instead of the coverage c, which is 0 or 1: c h = h.
 GF_VECTOR_CLONES inline void WeightByHoles(const float* __restrict h, int n, size_t padded,
-                                    float* __restrict channels) {
+                                           float* __restrict channels) {
   for (int c = 0; c < 4; ++c) {
     const float* in = channels + static_cast<size_t>(c) * padded;
     float* out = channels + static_cast<size_t>(c + 4) * padded;
@@ -299,8 +301,8 @@ class WindowSums {
   static constexpr int kExactEvery = 8;
   int rows_, cols_, window_, half_, channels_;
   size_t padded_;
-  std::vector<float> sample_;  // the channels of one ROI row, padded by half a window each side
-  std::vector<float> ring_;    // the last `window` rows' horizontal sums, all channels
+  std::vector<float> sample_;    // the channels of one ROI row, padded by half a window each side
+  std::vector<float> ring_;      // the last `window` rows' horizontal sums, all channels
   std::vector<float> entering_;  // the entering row's horizontal sums (rows summed by Slide)
   std::vector<float> sums_, u_, v_;
 };
@@ -313,8 +315,9 @@ class WindowSums {
 // q being p's predecessor on the path (its L in q, padded with one large entry on either side so
 // that d - 1 and d + 1 need no bounds checks; null at the path's start: L = C). Writes L(p, .)
 // to l and returns its minimum.
-GF_ALWAYS_INLINE uint16_t PathStep(const uint8_t* __restrict c, const uint16_t* __restrict q, uint16_t q_min,
-                         int planes, int p1, int p2, uint16_t* __restrict l) {
+GF_ALWAYS_INLINE uint16_t PathStep(const uint8_t* __restrict c, const uint16_t* __restrict q,
+                                   uint16_t q_min, int planes, int p1, int p2,
+                                   uint16_t* __restrict l) {
   uint16_t lowest = 0xffff;
   if (q == nullptr) {
     for (int d = 0; d < planes; ++d) {
@@ -335,8 +338,8 @@ GF_ALWAYS_INLINE uint16_t PathStep(const uint8_t* __restrict c, const uint16_t* 
 
 // sum[d] += a[d] + b[d] + e[d] + f[d] for d < n (vectorises; wraps as uint16 does).
 GF_ALWAYS_INLINE void AddFour(const uint16_t* __restrict a, const uint16_t* __restrict b,
-                    const uint16_t* __restrict e, const uint16_t* __restrict f, int n,
-                    uint16_t* __restrict sum) {
+                              const uint16_t* __restrict e, const uint16_t* __restrict f, int n,
+                              uint16_t* __restrict sum) {
   for (int d = 0; d < n; ++d) sum[d] = static_cast<uint16_t>(sum[d] + a[d] + b[d] + e[d] + f[d]);
 }
 
@@ -375,9 +378,8 @@ GF_VECTOR_CLONES inline void AggregatePass(const std::vector<uint8_t>& cost, int
         const int qx = x - s * (path == 1) + s * (path == 2);
         const bool has = i > 0 && qx >= 0 && qx < cols;
         const uint16_t q_min = has ? previous_min[static_cast<size_t>(qx) * 3 + path] : 0;
-        current_min[static_cast<size_t>(x) * 3 + path] =
-            PathStep(c, has ? at(previous, path, qx) : nullptr, q_min, planes, p1, p2,
-                     at(current, path, x));
+        current_min[static_cast<size_t>(x) * 3 + path] = PathStep(
+            c, has ? at(previous, path, qx) : nullptr, q_min, planes, p1, p2, at(current, path, x));
       }
       AddFour(l_along, at(current, 0, x), at(current, 1, x), at(current, 2, x), planes,
               &(*sum)[p * planes]);
@@ -387,5 +389,19 @@ GF_VECTOR_CLONES inline void AggregatePass(const std::vector<uint8_t>& cost, int
   }
 }
 
+// The least of t[0..n) (65535 when n is 0); a reduction that vectorises.
+GF_VECTOR_CLONES inline int Minimum(const uint16_t* t, int n) {
+  uint16_t lowest = 0xffff;
+  for (int d = 0; d < n; ++d) lowest = std::min(lowest, t[d]);
+  return lowest;
+}
+
+// The first index of t's least entry (n > 0), as std::min_element finds it.
+inline int FirstMinimum(const uint16_t* t, int n) {
+  const int lowest = Minimum(t, n);
+  int d = 0;
+  while (t[d] != lowest) ++d;
+  return d;
+}
 
 }  // namespace gf::sweep_detail

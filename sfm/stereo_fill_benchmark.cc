@@ -64,13 +64,12 @@ void BM_FillHolesByStereo(benchmark::State& state) {
   }
   const gf::RgbdFrame& key2 = keys[1 + choice.partner]->frame;
   gf::ThirdView third;
-  if (choice.third >= 0)
-    third = {&keys[1 + choice.third]->frame, choice.third_pose.key1_from_key2};
+  if (choice.third >= 0) third = {&keys[1 + choice.third]->frame, choice.third_pose.key1_from_key2};
   gf::StereoFillResult result;
   for (auto _ : state) {
-    result = gf::FillHolesByStereo(keys[0]->frame, key2, capture->camera,
-                                   choice.partner_pose.key1_from_key2, gf::StereoFillOptions{},
-                                   third);
+    result =
+        gf::FillHolesByStereo(keys[0]->frame, key2, capture->camera,
+                              choice.partner_pose.key1_from_key2, gf::StereoFillOptions{}, third);
   }
   state.counters["filled_pixels"] = result.success ? cv::countNonZero(result.fill_mask) : 0;
   state.SetLabel(result.path + ": " + result.termination);
