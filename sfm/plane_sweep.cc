@@ -43,6 +43,7 @@ using sweep_detail::AggregatePass;
 using sweep_detail::CostRow;
 using sweep_detail::FirstMinimum;
 using sweep_detail::GrayFloat;
+using sweep_detail::KeyframeRow;
 using sweep_detail::kUncovered;
 using sweep_detail::Minimum;
 using sweep_detail::ViewData;
@@ -184,6 +185,9 @@ std::vector<uint8_t> CostVolume(const SweepWork& w, int planes, double w_far, do
   const float min_var = static_cast<float>(options.min_texture * options.min_texture);
   const float min_inside = static_cast<float>(options.min_window_inside);
   const float neutral = static_cast<float>(options.textureless_cost);
+  cv::Mat inv_n(rows, cols, CV_32F);  // inv_area / keyframe 1's window coverage, once
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < cols; ++x) inv_n.at<float>(y, x) = inv_area / w.n1.at<float>(y, x);
   // Costs are written plane-major for a block of planes, then moved into the pixel-major volume
   // a block at a time (contiguous bytes per pixel instead of one scattered byte per plane).
   constexpr int kBlock = 16;
@@ -199,9 +203,10 @@ std::vector<uint8_t> CostVolume(const SweepWork& w, int planes, double w_far, do
       // Correlation over keyframe 1's covered pixels of each window.
       window_sums.Run(
           v, w.k * h * w.k_inv * shift, w.i_roi, w.c_roi, w.h_roi, [&](int y, const float* m) {
-            AccumulateCorrelation(m, hole_windows ? w.use_hole.ptr<float>(y) : nullptr, cols,
-                                  inv_area, min_inside, min_var, w.n1.ptr<float>(y),
-                                  w.mean_i.ptr<float>(y), w.var_i.ptr<float>(y), sum.ptr<float>(y),
+            const KeyframeRow k{w.n1.ptr<float>(y), inv_n.ptr<float>(y), w.mean_i.ptr<float>(y),
+                                w.var_i.ptr<float>(y),
+                                hole_windows ? w.use_hole.ptr<float>(y) : nullptr};
+            AccumulateCorrelation(m, k, cols, inv_area, min_inside, min_var, sum.ptr<float>(y),
                                   count.ptr<float>(y), seen.ptr<float>(y));
           });
     }

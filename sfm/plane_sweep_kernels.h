@@ -79,12 +79,13 @@ GF_VECTOR_CLONES inline void SumWindows(const float* in, size_t step, int count,
 // as WindowSums gives them): where the view covers every pixel of the window that keyframe 1
 // covers, seen counts up; where both windows also have texture, sum gains the NCC and count one.
 // Branch-free, so that the loops calling it vectorise. inside_x: keyframe 1's coverage mean of the
-// window; mean_i, var_i: its grey level's.
+// window; inv_n: inv_area / inside_x (the same for every plane, so computed once); mean_i, var_i:
+// its grey level's.
 GF_ALWAYS_INLINE void CorrelationStep(float m_jc, float m_jj, float m_ji, float m_c, float inv_area,
-                                      float min_inside, float min_var, float inside_x, float mean_i,
-                                      float var_i, float* sum, float* count, float* seen) {
+                                      float min_inside, float min_var, float inside_x, float inv_n,
+                                      float mean_i, float var_i, float* sum, float* count,
+                                      float* seen) {
   const int inside = (inside_x >= min_inside) & (m_c * inv_area >= inside_x - 1e-3f);
-  const float inv_n = inv_area / inside_x;
   const float mj = m_jc * inv_n;
   const float vj = m_jj * inv_n - mj * mj;
   const int textured = inside & (vj > min_var) & (var_i > min_var);
@@ -94,29 +95,37 @@ GF_ALWAYS_INLINE void CorrelationStep(float m_jc, float m_jj, float m_ji, float 
   *count += static_cast<float>(textured);
 }
 
+// Keyframe 1's window statistics along one row of the ROI, the same for every plane and view.
+struct KeyframeRow {
+  const float* inside;    // coverage mean of each window
+  const float* inv_n;     // inv_area / inside
+  const float* mean;      // grey level mean
+  const float* var;       // grey level variance
+  const float* use_hole;  // 1 where the pixel's window uses hole pixels only, else 0; null: none
+};
+
 // One row of one view's correlation with keyframe 1 (CorrelationStep per pixel) from the window
-// sums m (4 channels of n values; with use_hole, 8: the full windows' then the hole windows'),
-// taking the hole windows' sums where use_hole is 1 (it is 0 or 1; a blend, so that it
-// vectorises). window_inside, mean_i, var_i: keyframe 1's window statistics.
-GF_VECTOR_CLONES inline void AccumulateCorrelation(const float* m, const float* use_hole, int n,
+// sums m (4 channels of n values; with k.use_hole, 8: the full windows' then the hole windows'),
+// taking the hole windows' sums where use_hole is 1 (a blend, so that it vectorises).
+GF_VECTOR_CLONES inline void AccumulateCorrelation(const float* m, const KeyframeRow& k, int n,
                                                    float inv_area, float min_inside, float min_var,
-                                                   const float* window_inside, const float* mean_i,
-                                                   const float* var_i, float* __restrict sum,
-                                                   float* __restrict count,
+                                                   float* __restrict sum, float* __restrict count,
                                                    float* __restrict seen) {
   const float *m_jc = m, *m_jj = m + n, *m_ji = m + 2 * n, *m_c = m + 3 * n;
-  if (use_hole == nullptr) {
+  const float *inside = k.inside, *inv_n = k.inv_n, *mean = k.mean, *var = k.var;
+  if (k.use_hole == nullptr) {
     for (int x = 0; x < n; ++x)
-      CorrelationStep(m_jc[x], m_jj[x], m_ji[x], m_c[x], inv_area, min_inside, min_var,
-                      window_inside[x], mean_i[x], var_i[x], &sum[x], &count[x], &seen[x]);
+      CorrelationStep(m_jc[x], m_jj[x], m_ji[x], m_c[x], inv_area, min_inside, min_var, inside[x],
+                      inv_n[x], mean[x], var[x], &sum[x], &count[x], &seen[x]);
     return;
   }
   const float *h_jc = m + 4 * n, *h_jj = m + 5 * n, *h_ji = m + 6 * n, *h_c = m + 7 * n;
+  const float* use_hole = k.use_hole;
   for (int x = 0; x < n; ++x) {
     const float a = use_hole[x], b = 1.f - use_hole[x];
     CorrelationStep(a * h_jc[x] + b * m_jc[x], a * h_jj[x] + b * m_jj[x], a * h_ji[x] + b * m_ji[x],
-                    a * h_c[x] + b * m_c[x], inv_area, min_inside, min_var, window_inside[x],
-                    mean_i[x], var_i[x], &sum[x], &count[x], &seen[x]);
+                    a * h_c[x] + b * m_c[x], inv_area, min_inside, min_var, inside[x], inv_n[x],
+                    mean[x], var[x], &sum[x], &count[x], &seen[x]);
   }
 }
 
