@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <opencv2/imgproc.hpp>
 
 #include "acquisition/depth.h"
@@ -169,12 +170,12 @@ void KeyframeWindows(const PlaneSweepOptions& options, SweepWork* w) {
 // The matching cost of every plane at every roi pixel, pixel-major (cost[p * planes + d]):
 // 100 * (1 - mean NCC over the views that see it) in [0, 200], textureless_cost where keyframe
 // 1's window is flat or no view sees it (neutral: aggregation then carries the neighbours').
-std::vector<uint8_t> CostVolume(const SweepWork& w, int planes, double w_far, double dw,
-                                const PlaneSweepOptions& options) {
+std::unique_ptr<uint8_t[]> CostVolume(const SweepWork& w, int planes, double w_far, double dw,
+                                      const PlaneSweepOptions& options) {
   const int rows = w.roi.height, cols = w.roi.width;
   const size_t pixels = static_cast<size_t>(rows) * cols;
-  std::vector<uint8_t> cost(pixels * planes);
-  Eigen::Matrix3d shift = Eigen::Matrix3d::Identity();  // ROI pixel -> full image pixel
+  std::unique_ptr<uint8_t[]> cost(new uint8_t[pixels * planes]);  // every entry written below
+  Eigen::Matrix3d shift = Eigen::Matrix3d::Identity();            // ROI pixel -> full image pixel
   shift(0, 2) = w.roi.x;
   shift(1, 2) = w.roi.y;
   cv::Mat sum(rows, cols, CV_32F), count(rows, cols, CV_32F), seen(rows, cols, CV_32F);
@@ -247,9 +248,9 @@ double Parallax(const SweepWork& w, int x, int y, double z) {
 // Each wanted pixel's plane of least aggregated cost, refined to sub-plane precision by a
 // parabola, when its window has texture, the correlation there is high enough, the minimum is
 // distinct and a view gives enough parallax. Depth and score at working size.
-void SelectDepths(const SweepWork& w, const std::vector<uint8_t>& cost,
-                  const std::vector<uint16_t>& total, int planes, double w_far, double dw,
-                  const PlaneSweepOptions& options, cv::Mat* depth, cv::Mat* score) {
+void SelectDepths(const SweepWork& w, const uint8_t* cost, const uint16_t* total, int planes,
+                  double w_far, double dw, const PlaneSweepOptions& options, cv::Mat* depth,
+                  cv::Mat* score) {
   *depth = cv::Mat(w.size, CV_32F, cv::Scalar(0.f));
   *score = cv::Mat(w.size, CV_32F, cv::Scalar(0.f));
   const double min_var = options.min_texture * options.min_texture;
@@ -311,19 +312,19 @@ PlaneSweepResult SweepDepth(const RgbdFrame& key1, const std::vector<SweepView>&
                              options.max_planes);
   const int planes = result.planes;
   const double dw = (w_near - w_far) / (planes - 1);
-  const std::vector<uint8_t> cost = CostVolume(w, planes, w_far, dw, options);
+  const std::unique_ptr<uint8_t[]> cost = CostVolume(w, planes, w_far, dw, options);
   // Aggregation along 8 paths (or none), then the best plane per pixel.
-  std::vector<uint16_t> total;
+  const size_t entries = static_cast<size_t>(w.roi.area()) * planes;
+  std::unique_ptr<uint16_t[]> total(new uint16_t[entries]);  // every entry written below
   if (options.smooth_large > 0) {
-    total.assign(cost.size(), 0);
     for (bool forward : {true, false})
-      AggregatePass(cost, w.roi.height, w.roi.width, planes, forward, options.smooth_small,
-                    options.smooth_large, &total);
+      AggregatePass(cost.get(), w.roi.height, w.roi.width, planes, forward, options.smooth_small,
+                    options.smooth_large, total.get());
   } else {
-    total.assign(cost.begin(), cost.end());
+    std::copy(cost.get(), cost.get() + entries, total.get());
   }
   cv::Mat depth_u, score_u;
-  SelectDepths(w, cost, total, planes, w_far, dw, options, &depth_u, &score_u);
+  SelectDepths(w, cost.get(), total.get(), planes, w_far, dw, options, &depth_u, &score_u);
   // Back into keyframe 1's (distorted) pixel grid.
   const double scale = 1.0 / options.downscale;
   const UndistortedPixels undistorted(camera);

@@ -345,20 +345,25 @@ GF_ALWAYS_INLINE uint16_t PathStep(const uint8_t* __restrict c, const uint16_t* 
   return lowest;
 }
 
-// sum[d] += a[d] + b[d] + e[d] + f[d] for d < n (vectorises; wraps as uint16 does).
+// sum[d] = (add ? sum[d] : 0) + a[d] + b[d] + e[d] + f[d] for d < n (vectorises; wraps as uint16
+// does).
 GF_ALWAYS_INLINE void AddFour(const uint16_t* __restrict a, const uint16_t* __restrict b,
                               const uint16_t* __restrict e, const uint16_t* __restrict f, int n,
-                              uint16_t* __restrict sum) {
-  for (int d = 0; d < n; ++d) sum[d] = static_cast<uint16_t>(sum[d] + a[d] + b[d] + e[d] + f[d]);
+                              bool add, uint16_t* __restrict sum) {
+  if (add) {
+    for (int d = 0; d < n; ++d) sum[d] = static_cast<uint16_t>(sum[d] + a[d] + b[d] + e[d] + f[d]);
+  } else {
+    for (int d = 0; d < n; ++d) sum[d] = static_cast<uint16_t>(a[d] + b[d] + e[d] + f[d]);
+  }
 }
 
-// Half of semi-global aggregation over cost[rows][cols][planes], added into sum: the four paths
-// whose predecessors come before each pixel in one scan of the image. Forward (rows top to bottom,
-// each left to right): paths (dx, dy) = (1, 0), (0, 1), (1, 1), (-1, 1); backward: the opposite
-// four. Two passes give the 8 paths while reading the cost volume and the sums twice, not 8 times.
-GF_VECTOR_CLONES inline void AggregatePass(const std::vector<uint8_t>& cost, int rows, int cols,
-                                           int planes, bool forward, int p1, int p2,
-                                           std::vector<uint16_t>* sum) {
+// Half of semi-global aggregation over cost[rows][cols][planes] into sum: the four paths whose
+// predecessors come before each pixel in one scan of the image. Forward (rows top to bottom, each
+// left to right): paths (dx, dy) = (1, 0), (0, 1), (1, 1), (-1, 1), written into sum; backward: the
+// opposite four, added to it. The two passes give the 8 paths while reading the cost volume twice
+// and the sums three times, not 8 and 16.
+GF_VECTOR_CLONES inline void AggregatePass(const uint8_t* cost, int rows, int cols, int planes,
+                                           bool forward, int p1, int p2, uint16_t* sum) {
   const size_t stride = static_cast<size_t>(planes) + 2;
   constexpr uint16_t kPad = 0x3fff;
   // Per pixel of a row, the L of the three paths that come from the previous row (straight down
@@ -390,8 +395,8 @@ GF_VECTOR_CLONES inline void AggregatePass(const std::vector<uint8_t>& cost, int
         current_min[static_cast<size_t>(x) * 3 + path] = PathStep(
             c, has ? at(previous, path, qx) : nullptr, q_min, planes, p1, p2, at(current, path, x));
       }
-      AddFour(l_along, at(current, 0, x), at(current, 1, x), at(current, 2, x), planes,
-              &(*sum)[p * planes]);
+      AddFour(l_along, at(current, 0, x), at(current, 1, x), at(current, 2, x), planes, !forward,
+              &sum[p * planes]);
     }
     std::swap(previous, current);
     std::swap(previous_min, current_min);
