@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <opencv2/core/utility.hpp>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,7 @@ void BM_FillHolesByStereo(benchmark::State& state) {
   gf::ThirdView third;
   if (choice.third >= 0) third = {&keys[1 + choice.third]->frame, choice.third_pose.key1_from_key2};
   gf::StereoFillResult result;
+  cv::setNumThreads(1);  // one core, OpenCV's calls included
   for (auto _ : state) {
     result =
         gf::FillHolesByStereo(keys[0]->frame, key2, capture->camera,
