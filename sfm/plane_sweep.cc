@@ -195,10 +195,8 @@ std::unique_ptr<uint8_t[]> CostVolume(const SweepWork& w, int planes, double w_f
   std::vector<uint8_t> block(static_cast<size_t>(kBlock) * pixels);
   for (int plane = 0; plane < planes; ++plane) {
     const double inverse_depth = w_far + plane * dw;
-    sum.setTo(0.f);
-    count.setTo(0.f);
-    seen.setTo(0.f);
     for (const ViewData& v : w.views) {
+      const bool first = &v == &w.views.front();  // writes sum, count and seen; the others add
       Eigen::Matrix3d h = v.rotation;
       h.col(2) += v.translation * inverse_depth;  // R + t n^T / z with n = (0, 0, 1)
       // Correlation over keyframe 1's covered pixels of each window.
@@ -207,8 +205,8 @@ std::unique_ptr<uint8_t[]> CostVolume(const SweepWork& w, int planes, double w_f
             const KeyframeRow k{w.n1.ptr<float>(y), inv_n.ptr<float>(y), w.mean_i.ptr<float>(y),
                                 w.var_i.ptr<float>(y),
                                 hole_windows ? w.use_hole.ptr<float>(y) : nullptr};
-            AccumulateCorrelation(m, k, cols, inv_area, min_inside, min_var, sum.ptr<float>(y),
-                                  count.ptr<float>(y), seen.ptr<float>(y));
+            AccumulateCorrelation(m, k, cols, inv_area, min_inside, min_var, first,
+                                  sum.ptr<float>(y), count.ptr<float>(y), seen.ptr<float>(y));
           });
     }
     uint8_t* plane_cost = &block[static_cast<size_t>(plane % kBlock) * pixels];

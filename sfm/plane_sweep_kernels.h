@@ -80,7 +80,8 @@ GF_VECTOR_CLONES inline void SumWindows(const float* in, size_t step, int count,
 // covers, seen counts up; where both windows also have texture, sum gains the NCC and count one.
 // Branch-free, so that the loops calling it vectorise. inside_x: keyframe 1's coverage mean of the
 // window; inv_n: inv_area / inside_x (the same for every plane, so computed once); mean_i, var_i:
-// its grey level's.
+// its grey level's. kFirst: the first view writes the three outputs instead of adding to them.
+template <bool kFirst>
 GF_ALWAYS_INLINE void CorrelationStep(float m_jc, float m_jj, float m_ji, float m_c, float inv_area,
                                       float min_inside, float min_var, float inside_x, float inv_n,
                                       float mean_i, float var_i, float* sum, float* count,
@@ -90,9 +91,15 @@ GF_ALWAYS_INLINE void CorrelationStep(float m_jc, float m_jj, float m_ji, float 
   const float vj = m_jj * inv_n - mj * mj;
   const int textured = inside & (vj > min_var) & (var_i > min_var);
   const float ncc = (m_ji * inv_n - mean_i * mj) / std::sqrt(std::max(var_i * vj, 1e-12f));
-  *seen += static_cast<float>(inside);
-  *sum += ncc * static_cast<float>(textured);
-  *count += static_cast<float>(textured);
+  if constexpr (kFirst) {
+    *seen = static_cast<float>(inside);
+    *sum = ncc * static_cast<float>(textured);
+    *count = static_cast<float>(textured);
+  } else {
+    *seen += static_cast<float>(inside);
+    *sum += ncc * static_cast<float>(textured);
+    *count += static_cast<float>(textured);
+  }
 }
 
 // Keyframe 1's window statistics along one row of the ROI, the same for every plane and view.
@@ -107,26 +114,40 @@ struct KeyframeRow {
 // One row of one view's correlation with keyframe 1 (CorrelationStep per pixel) from the window
 // sums m (4 channels of n values; with k.use_hole, 8: the full windows' then the hole windows'),
 // taking the hole windows' sums where use_hole is 1 (a blend, so that it vectorises).
-GF_VECTOR_CLONES inline void AccumulateCorrelation(const float* m, const KeyframeRow& k, int n,
-                                                   float inv_area, float min_inside, float min_var,
-                                                   float* __restrict sum, float* __restrict count,
-                                                   float* __restrict seen) {
+template <bool kFirst>
+GF_ALWAYS_INLINE void CorrelationRow(const float* m, const KeyframeRow& k, int n, float inv_area,
+                                     float min_inside, float min_var, float* __restrict sum,
+                                     float* __restrict count, float* __restrict seen) {
   const float *m_jc = m, *m_jj = m + n, *m_ji = m + 2 * n, *m_c = m + 3 * n;
   const float *inside = k.inside, *inv_n = k.inv_n, *mean = k.mean, *var = k.var;
   if (k.use_hole == nullptr) {
     for (int x = 0; x < n; ++x)
-      CorrelationStep(m_jc[x], m_jj[x], m_ji[x], m_c[x], inv_area, min_inside, min_var, inside[x],
-                      inv_n[x], mean[x], var[x], &sum[x], &count[x], &seen[x]);
+      CorrelationStep<kFirst>(m_jc[x], m_jj[x], m_ji[x], m_c[x], inv_area, min_inside, min_var,
+                              inside[x], inv_n[x], mean[x], var[x], &sum[x], &count[x], &seen[x]);
     return;
   }
   const float *h_jc = m + 4 * n, *h_jj = m + 5 * n, *h_ji = m + 6 * n, *h_c = m + 7 * n;
   const float* use_hole = k.use_hole;
   for (int x = 0; x < n; ++x) {
     const float a = use_hole[x], b = 1.f - use_hole[x];
-    CorrelationStep(a * h_jc[x] + b * m_jc[x], a * h_jj[x] + b * m_jj[x], a * h_ji[x] + b * m_ji[x],
-                    a * h_c[x] + b * m_c[x], inv_area, min_inside, min_var, inside[x], inv_n[x],
-                    mean[x], var[x], &sum[x], &count[x], &seen[x]);
+    CorrelationStep<kFirst>(a * h_jc[x] + b * m_jc[x], a * h_jj[x] + b * m_jj[x],
+                            a * h_ji[x] + b * m_ji[x], a * h_c[x] + b * m_c[x], inv_area,
+                            min_inside, min_var, inside[x], inv_n[x], mean[x], var[x], &sum[x],
+                            &count[x], &seen[x]);
   }
+}
+
+// CorrelationRow for one view: the first view of a plane (first) writes sum, count and seen, the
+// others add to them.
+GF_VECTOR_CLONES inline void AccumulateCorrelation(const float* m, const KeyframeRow& k, int n,
+                                                   float inv_area, float min_inside, float min_var,
+                                                   bool first, float* __restrict sum,
+                                                   float* __restrict count,
+                                                   float* __restrict seen) {
+  if (first)
+    CorrelationRow<true>(m, k, n, inv_area, min_inside, min_var, sum, count, seen);
+  else
+    CorrelationRow<false>(m, k, n, inv_area, min_inside, min_var, sum, count, seen);
 }
 
 // One row of the cost volume from the correlation sums of all views (sum, count, seen as
