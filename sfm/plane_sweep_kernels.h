@@ -1,7 +1,8 @@
 // The inner loops of the plane sweep (sfm/plane_sweep.h): warping a view through a plane's
 // homography fused with window sums, the correlation and cost of a row, and semi-global
-// aggregation along one path. Internal to plane_sweep.cc (which alone includes it): written as
-// branch-free loops over rows so that they vectorise, and compiled for AVX2 and baseline x86-64.
+// aggregation. Internal to plane_sweep.cc (and plane_sweep_kernels_test.cc, which alone include
+// it): written as branch-free loops over rows so that they vectorise, and compiled for AVX2 and
+// baseline x86-64.
 #pragma once
 
 #include <Eigen/Core>
