@@ -28,7 +28,7 @@ TEST(Config, SettingsListEveryStageWithItsValues) {
             (std::vector<int>{10, 6, 2}));
   EXPECT_EQ(j["tracker"]["keyframes"]["max_translation_m"], 0.02);
   EXPECT_EQ(j["fill"]["pairs"]["min_matches"], 40);
-  EXPECT_EQ(j["fill"]["pairs"]["refine"]["photometric"], false);
+  EXPECT_EQ(j["fill"]["pairs"]["refine"]["photometric"], true);
   EXPECT_EQ(j["fill"]["stereo"]["sgbm"]["block_size"], 5);
   EXPECT_EQ(j["fill"]["stereo"]["plane_sweep"]["max_planes"], 64);
   EXPECT_EQ(j["fill"]["carry"]["max_keyframes"], 15);

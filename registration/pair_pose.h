@@ -33,17 +33,13 @@ namespace gf {
 // the colour images agree. On TUM fr1/xyz with ground-truth poses as the start, the plane sweep's
 // median error against the sensor fell from 10% (ground truth) to 2.8% (PnP) and 2.2% (PnP +
 // photometric): the colour images, depth registration and motion-capture poses are not exactly
-// consistent, and the stereo needs them consistent. Started from the tracker's poses (as a run
-// is), the photometric step no longer changes the fill measurably: punched head and mid (three
-// punch seeds) and twelve synthetic captures move by about a point of good fills either way, and
-// it took 80 ms of pair selection's 110 per keyframe, so it is off by default
-// (docs/experiments/2026-12-04-plane-sweep-speed.md).
+// consistent, and the stereo needs them consistent.
 struct PoseRefinementOptions {
   double reprojection_px = 2.0;  // RANSAC inlier threshold, pixels
   int min_inliers = 30;          // fewer: keep the tracked pose
   double max_change_m = 0.05;    // larger change of the tracked pose: rejected, metres
   double max_change_deg = 5.0;   // ... degrees
-  bool photometric = false;      // then dense photometric alignment (OpenCV RgbdOdometry)
+  bool photometric = true;       // then dense photometric alignment
   bool Check(std::string* message = nullptr) const;
 };
 
