@@ -383,7 +383,7 @@ GF_ALWAYS_INLINE void AddFour(const uint16_t* __restrict a, const uint16_t* __re
 // predecessors come before each pixel in one scan of the image. Forward (rows top to bottom, each
 // left to right): paths (dx, dy) = (1, 0), (0, 1), (1, 1), (-1, 1), written into sum; backward: the
 // opposite four, added to it. The two passes give the 8 paths while reading the cost volume twice
-// and the sums three times, not 8 and 16.
+// and accessing the sums three times (8 and 16 times, one path at a time).
 GF_VECTOR_CLONES inline void AggregatePass(const uint8_t* cost, int rows, int cols, int planes,
                                            bool forward, int p1, int p2, uint16_t* sum) {
   const size_t stride = static_cast<size_t>(planes) + 2;
