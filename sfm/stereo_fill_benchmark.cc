@@ -40,6 +40,7 @@ const Capture* LoadHead() {
   while (source->Next(&frame)) {
     capture->world_from_camera.push_back(tracker.Track(frame).world_from_camera);
     capture->frames.push_back(frame);
+    frame = gf::RgbdFrame();  // the next frame must not reuse (and overwrite) the kept images
   }
   return capture.get();
 }
