@@ -124,7 +124,7 @@ nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, in
                                   int not_filled) {
   using json = nlohmann::ordered_json;
   long holes = 0, filled = 0, carried = 0, corrected = 0;
-  int paired = 0, rescaled = 0;
+  int paired = 0, rescaled = 0, vertical = 0;
   std::vector<double> errors, ms;
   json list = json::array(), failed = json::array();
   // How many pairs took which path, and why sideways pairs did not get SGBM.
@@ -140,6 +140,7 @@ nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, in
     if (!k.path.empty()) paths[k.path] = paths.value(k.path, 0) + 1;
     if (!k.sgbm_refused.empty()) refused[k.sgbm_refused] = refused.value(k.sgbm_refused, 0) + 1;
     rescaled += k.sgbm_rescaled;
+    vertical += k.sgbm_vertical;
     holes += k.hole_pixels;
     filled += k.filled_pixels;
     carried += k.carried_pixels;
@@ -157,6 +158,7 @@ nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, in
                     {"third_view", k.third_view},
                     {"method", k.method},
                     {"path", name_or_null(k.path)},
+                    {"sgbm_vertical", k.sgbm_vertical},
                     {"hole_pixels", k.hole_pixels},
                     {"filled_pixels", k.filled_pixels},
                     {"carried_pixels", k.carried_pixels},
@@ -181,6 +183,7 @@ nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, in
           {"pair_paths", paths},
           {"sgbm_refused", refused},
           {"sgbm_rescaled", rescaled},
+          {"sgbm_vertical", vertical},
           {"pair_median_ms", ms.empty() ? json() : json(ms[ms.size() / 2])},
           {"pair_max_ms", ms.empty() ? json() : json(ms.back())},
           {"per_keyframe", list}};

@@ -91,6 +91,7 @@ FilledKeyframe KeyframeFiller::Fill(const StereoJob& job) {
       k.path = r.path;
       k.sgbm_refused = r.sgbm_refused;
       k.sgbm_rescaled = r.rectification.usable && r.rectification.rescaled;
+      k.sgbm_vertical = r.rectification.usable && r.rectification.vertical;
       k.baseline_m = job.choice.baseline_m;
       k.matches = job.choice.matches;
       k.third_view = r.third_view_used;

@@ -44,6 +44,7 @@ struct KeyframeFill {
   std::string path;            // StereoFillResult::path: how the pair was served
   std::string sgbm_refused;    // why a sideways pair did not get SGBM (degenerate rectification)
   bool sgbm_rescaled = false;  // its rectified focal length was reduced to fit the search
+  bool sgbm_vertical = false;  // its baseline is mostly vertical: SGBM ran on transposed images
   std::string termination;
   std::string failure;  // non-empty: the keyframe was skipped, and why
   double baseline_m = 0;

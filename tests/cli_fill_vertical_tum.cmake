@@ -1,0 +1,99 @@
+# End-to-end on real frames with vertical camera motion, which no capture we have holds: the
+# first 40 frames of the TUM mid sequence (the camera moves sideways), punched by punch-holes.py,
+# then turned a quarter turn about the optical axis by rotate_capture.py (portrait 480x640 images,
+# camera.json and ground truth to match): the same physical camera on its side, now moving
+# vertically in its images. `glassfusion reconstruct` (fill, fusion, loop closure) runs on both;
+# the rotated run must serve its pairs by SGBM on transposed images and score about as the
+# upright one does (tracking, fill-eval.py), since the scene and the motion are the same.
+# SGBM itself fills little of these patches, upright or not (about a tenth of the removed pixels
+# with the sweep after it off: most of mid's pairs disagree with the sensor by 4 cm or more), so
+# SGBM's vertical geometry is checked by sfm/rectified_sgbm_test (FillsAMostlyVerticalPair); this
+# test checks a whole run on portrait images against the same run upright.
+set(input "${DATASETS}/tum_fr1_xyz_mid")
+get_filename_component(tools "${DATASETS}/../tools" ABSOLUTE)
+if(NOT EXISTS "${input}" OR NOT EXISTS "${tools}/punch-holes.py")
+  message("SKIPPED: ${input} or ${tools} not present")
+  return()
+endif()
+include("${CMAKE_CURRENT_LIST_DIR}/find_python.cmake")
+include("${CMAKE_CURRENT_LIST_DIR}/check_fill_score.cmake")
+set(work "${CMAKE_CURRENT_BINARY_DIR}/cli_fill_vertical_tmp")
+file(REMOVE_RECURSE "${work}")
+execute_process(COMMAND "${PYTHON}" "${tools}/punch-holes.py" "${input}" "${work}/upright" 0 40
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "punch-holes.py failed (${rc}): ${err}")
+endif()
+execute_process(COMMAND "${PYTHON}" "${CMAKE_CURRENT_LIST_DIR}/rotate_capture.py" "${work}/upright"
+                        "${work}/rotated"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "rotate_capture.py failed (${rc}): ${err}")
+endif()
+
+# Runs reconstruct on capture NAME and sets <NAME>_ate, <NAME>_score (fill-eval.py's line),
+# <NAME>_good (its good rate) and <NAME>_report (report.json).
+function(run_capture name)
+  set(capture "${work}/${name}")
+  execute_process(COMMAND "${GLASSFUSION}" reconstruct "${capture}" --out "${capture}_run"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "reconstruct ${name} failed (${rc}): ${err}")
+  endif()
+  execute_process(COMMAND "${GLASSFUSION}" eval --gt "${capture}/groundtruth.txt"
+                          --est "${capture}_run/trajectory.txt"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE eval_out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "eval ${name} failed (${rc}): ${err}")
+  endif()
+  string(JSON ate GET "${eval_out}" ate_rmse_m)
+  execute_process(COMMAND "${PYTHON}" "${tools}/fill-eval.py" "${capture}" "${capture}_run"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE score ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0 OR NOT score MATCHES "good_rate=([0-9.]+)")
+    message(FATAL_ERROR "fill-eval.py on ${name} failed (${rc}): ${err} ${score}")
+  endif()
+  string(STRIP "${score}" score)
+  file(READ "${capture}_run/report.json" report)
+  set(${name}_ate ${ate} PARENT_SCOPE)
+  set(${name}_score "${score}" PARENT_SCOPE)
+  set(${name}_good ${CMAKE_MATCH_1} PARENT_SCOPE)
+  set(${name}_report "${report}" PARENT_SCOPE)
+endfunction()
+
+run_capture(upright)
+run_capture(rotated)
+
+# The rotated run: complete, every frame tracked, most pairs served by SGBM on transposed images
+# (the upright run's by none), a map with fill in it.
+string(JSON complete GET "${rotated_report}" complete)
+string(JSON lost GET "${rotated_report}" tracking lost_frames)
+string(JSON vertical GET "${rotated_report}" fill sgbm_vertical)
+string(JSON paired GET "${rotated_report}" fill keyframes_paired)
+string(JSON surfels GET "${rotated_report}" surfels count)
+string(JSON filled_surfels GET "${rotated_report}" surfels by_source stereo_fill)
+string(JSON upright_vertical GET "${upright_report}" fill sgbm_vertical)
+math(EXPR half "${paired} / 2")
+if(NOT complete OR NOT lost EQUAL 0 OR paired LESS 10 OR vertical LESS half OR
+   NOT upright_vertical EQUAL 0 OR surfels LESS 20000 OR filled_surfels LESS 1)
+  message(FATAL_ERROR "rotated run: complete ${complete}, ${lost} lost, ${vertical} of ${paired} "
+                      "pairs vertical (upright run: ${upright_vertical}), ${surfels} surfels, "
+                      "${filled_surfels} from the fill")
+endif()
+# Today: ATE 6.9 mm both ways; fill 0.63 / good 0.44 / median 1.6% / p90 5.4% rotated against
+# 0.64 / 0.47 / 1.6% / 5.1% upright (these first 40 frames are the hardest of mid: few keyframes
+# to carry fills from). The bounds catch a broken vertical path, not a point of fill.
+if(rotated_ate GREATER 0.012 OR upright_ate GREATER 0.012)
+  message(FATAL_ERROR "ATE rotated ${rotated_ate} m, upright ${upright_ate} m: over 1.2 cm")
+endif()
+check_fill_score("${rotated_score}" "fill of the rotated (vertical-motion) capture" 0.50 0.35 0.025
+                 0.08)
+execute_process(COMMAND "${PYTHON}" -c
+                        "import sys; sys.exit(abs(${rotated_good} - ${upright_good}) > 0.08 or abs(${rotated_ate} - ${upright_ate}) > 0.003)"
+                RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "rotated and upright runs differ: good ${rotated_good} against "
+                      "${upright_good}, ATE ${rotated_ate} against ${upright_ate} m")
+endif()
+file(REMOVE_RECURSE "${work}")
+message("vertical motion ok: rotated ${rotated_score}, ATE ${rotated_ate} m; upright "
+        "${upright_score}, ATE ${upright_ate} m")

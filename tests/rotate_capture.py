@@ -1,0 +1,96 @@
+#!/usr/bin/env python3
+"""A TUM capture turned a quarter turn about the optical axis: every image (rgb/, depth/ and, when
+present, the truth/ that punch-holes.py writes) rotated 90 degrees clockwise, camera.json and the
+ground truth changed to match. The camera is the same physical one held on its side, so a capture
+that moves sideways becomes one that moves vertically in its (portrait, 480x640) images: real
+frames for the vertical-motion paths (SGBM on transposed images), which no capture we have holds.
+
+Usage: rotate_capture.py SRC DST
+
+Pixel (u, v) of a W x H image goes to (H - 1 - v, u). With the new camera axes x' = -y, y' = x,
+z' = z: fx' = fy, fy' = fx, cx' = H - 1 - cy, cy' = cx; the radial distortion terms are unchanged
+and the tangential ones become p1' = p2, p2' = -p1 (Brown-Conrady, as OpenCV and camera.json);
+each ground-truth pose world_from_camera is followed by camera_from_rotated (z' = z, a quarter
+turn).
+"""
+import json
+import os
+import shutil
+import sys
+
+import cv2
+import numpy as np
+
+# camera_from_rotated: x = y', y = -x', z = z'.
+CAMERA_FROM_ROTATED = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def quaternion_to_matrix(x, y, z, w):
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def matrix_to_quaternion(m):
+    # The unit quaternion (w >= 0) of a rotation matrix, by the largest of its four components.
+    trace = np.trace(m)
+    candidates = [1 + trace, 1 + 2 * m[0, 0] - trace, 1 + 2 * m[1, 1] - trace,
+                  1 + 2 * m[2, 2] - trace]
+    k = int(np.argmax(candidates))
+    s = 2 * np.sqrt(candidates[k])
+    if k == 0:
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
+    elif k == 1:
+        q = [s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s]
+    elif k == 2:
+        q = [(m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s]
+    else:
+        q = [(m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4, (m[1, 0] - m[0, 1]) / s]
+    return -np.array(q) if q[3] < 0 else np.array(q)
+
+
+def rotate_camera(camera):
+    width, height = camera["width"], camera["height"]
+    out = dict(camera)
+    out.update(width=height, height=width, fx=camera["fy"], fy=camera["fx"],
+               cx=height - 1 - camera["cy"], cy=camera["cx"])
+    d = list(camera.get("distortion", []))
+    if len(d) >= 4:
+        d[2], d[3] = d[3], -d[2]
+        out["distortion"] = d
+    return out
+
+
+def main(src, dst):
+    os.makedirs(dst, exist_ok=True)
+    with open(os.path.join(src, "camera.json")) as f:
+        camera = json.load(f)
+    with open(os.path.join(dst, "camera.json"), "w") as f:
+        json.dump(rotate_camera(camera), f, indent=1)
+    for folder in ["rgb", "depth", "truth"]:
+        if not os.path.isdir(os.path.join(src, folder)):
+            continue
+        os.makedirs(os.path.join(dst, folder), exist_ok=True)
+        for name in sorted(os.listdir(os.path.join(src, folder))):
+            image = cv2.imread(os.path.join(src, folder, name), cv2.IMREAD_UNCHANGED)
+            if image is None:
+                sys.exit(f"rotate_capture: {os.path.join(src, folder, name)}: not an image")
+            cv2.imwrite(os.path.join(dst, folder, name), cv2.rotate(image, cv2.ROTATE_90_CLOCKWISE))
+    for name in ["rgb.txt", "depth.txt"]:
+        shutil.copy(os.path.join(src, name), os.path.join(dst, name))
+    with open(os.path.join(src, "groundtruth.txt")) as f, \
+            open(os.path.join(dst, "groundtruth.txt"), "w") as out:
+        for line in f:
+            if line.startswith("#") or not line.strip():
+                out.write(line)
+                continue
+            v = line.split()
+            rotation = quaternion_to_matrix(*map(float, v[4:8])) @ CAMERA_FROM_ROTATED
+            q = matrix_to_quaternion(rotation)
+            out.write(" ".join(v[:4] + ["%.7f" % c for c in q]) + "\n")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3:
+        sys.exit(__doc__)
+    main(sys.argv[1], sys.argv[2])
