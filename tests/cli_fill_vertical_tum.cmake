@@ -5,10 +5,11 @@
 # vertically in its images. `glassfusion reconstruct` (fill, fusion, loop closure) runs on both;
 # the rotated run must serve its pairs by SGBM on transposed images and score about as the
 # upright one does (tracking, fill-eval.py), since the scene and the motion are the same.
-# SGBM itself fills little of these patches, upright or not (about a tenth of the removed pixels
-# with the sweep after it off: most of mid's pairs disagree with the sensor by 4 cm or more), so
-# SGBM's vertical geometry is checked by sfm/rectified_sgbm_test (FillsAMostlyVerticalPair); this
-# test checks a whole run on portrait images against the same run upright.
+# On these 40 frames SGBM alone fills about a tenth of the removed pixels, upright or not (few
+# keyframes to carry fills from, a third of the pairs refused by the validation), and the sweep
+# after it the rest; so SGBM's vertical geometry is checked by sfm/rectified_sgbm_test
+# (FillsAMostlyVerticalPair), and this test checks a whole run on portrait images against the
+# same run upright.
 set(input "${DATASETS}/tum_fr1_xyz_mid")
 get_filename_component(tools "${DATASETS}/../tools" ABSOLUTE)
 if(NOT EXISTS "${input}" OR NOT EXISTS "${tools}/punch-holes.py")
