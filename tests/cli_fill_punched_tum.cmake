@@ -3,21 +3,8 @@
 # the TUM head sequence (keeping it as truth), `glassfusion reconstruct` fills keyframe holes, and
 # fill-eval.py scores keyframes/<ts>.depth_filled.png against the removed depth. Also checks the
 # run folder's keyframe files and report.json's fill object.
-set(input "${DATASETS}/tum_fr1_xyz_head")
-get_filename_component(tools "${DATASETS}/../tools" ABSOLUTE)
-if(NOT EXISTS "${input}" OR NOT EXISTS "${tools}/punch-holes.py")
-  message("SKIPPED: ${input} or ${tools} not present")
-  return()
-endif()
-include("${CMAKE_CURRENT_LIST_DIR}/find_python.cmake")
-include("${CMAKE_CURRENT_LIST_DIR}/check_fill_score.cmake")
-set(work "${CMAKE_CURRENT_BINARY_DIR}/cli_fill_tmp")
-file(REMOVE_RECURSE "${work}")
-execute_process(COMMAND "${PYTHON}" "${tools}/punch-holes.py" "${input}" "${work}/punched" 0 40
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "punch-holes.py failed (${rc}): ${err}")
-endif()
+include("${CMAKE_CURRENT_LIST_DIR}/punch_tum.cmake")
+punch_tum(tum_fr1_xyz_head cli_fill_tmp punched)
 execute_process(COMMAND "${GLASSFUSION}" reconstruct "${work}/punched" --out "${work}/run"
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)

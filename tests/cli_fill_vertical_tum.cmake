@@ -10,21 +10,8 @@
 # after it the rest; so SGBM's vertical geometry is checked by sfm/rectified_sgbm_test
 # (FillsAMostlyVerticalPair), and this test checks a whole run on portrait images against the
 # same run upright.
-set(input "${DATASETS}/tum_fr1_xyz_mid")
-get_filename_component(tools "${DATASETS}/../tools" ABSOLUTE)
-if(NOT EXISTS "${input}" OR NOT EXISTS "${tools}/punch-holes.py")
-  message("SKIPPED: ${input} or ${tools} not present")
-  return()
-endif()
-include("${CMAKE_CURRENT_LIST_DIR}/find_python.cmake")
-include("${CMAKE_CURRENT_LIST_DIR}/check_fill_score.cmake")
-set(work "${CMAKE_CURRENT_BINARY_DIR}/cli_fill_vertical_tmp")
-file(REMOVE_RECURSE "${work}")
-execute_process(COMMAND "${PYTHON}" "${tools}/punch-holes.py" "${input}" "${work}/upright" 0 40
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "punch-holes.py failed (${rc}): ${err}")
-endif()
+include("${CMAKE_CURRENT_LIST_DIR}/punch_tum.cmake")
+punch_tum(tum_fr1_xyz_mid cli_fill_vertical_tmp upright)
 execute_process(COMMAND "${PYTHON}" "${CMAKE_CURRENT_LIST_DIR}/rotate_capture.py" "${work}/upright"
                         "${work}/rotated"
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
