@@ -21,32 +21,19 @@ import sys
 import cv2
 import numpy as np
 
-# camera_from_rotated: x = y', y = -x', z = z'.
-CAMERA_FROM_ROTATED = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+# camera_from_rotated (x = y', y = -x', z = z': a quarter turn about z, -90 degrees) as a unit
+# quaternion (x, y, z, w).
+CAMERA_FROM_ROTATED = np.array([0.0, 0.0, -np.sqrt(0.5), np.sqrt(0.5)])
 
 
-def quaternion_to_matrix(x, y, z, w):
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
-def matrix_to_quaternion(m):
-    # The unit quaternion (w >= 0) of a rotation matrix, by the largest of its four components.
-    trace = np.trace(m)
-    candidates = [1 + trace, 1 + 2 * m[0, 0] - trace, 1 + 2 * m[1, 1] - trace,
-                  1 + 2 * m[2, 2] - trace]
-    k = int(np.argmax(candidates))
-    s = 2 * np.sqrt(candidates[k])
-    if k == 0:
-        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
-    elif k == 1:
-        q = [s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s]
-    elif k == 2:
-        q = [(m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s]
-    else:
-        q = [(m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4, (m[1, 0] - m[0, 1]) / s]
-    return -np.array(q) if q[3] < 0 else np.array(q)
+def compose(a, b):
+    """The quaternion (x, y, z, w) of rotation a followed in its frame by b: a * b (Hamilton)."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return np.array([aw * bx + ax * bw + ay * bz - az * by,
+                     aw * by - ax * bz + ay * bw + az * bx,
+                     aw * bz + ax * by - ay * bx + az * bw,
+                     aw * bw - ax * bx - ay * by - az * bz])
 
 
 def rotate_camera(camera):
@@ -85,8 +72,7 @@ def main(src, dst):
                 out.write(line)
                 continue
             v = line.split()
-            rotation = quaternion_to_matrix(*map(float, v[4:8])) @ CAMERA_FROM_ROTATED
-            q = matrix_to_quaternion(rotation)
+            q = compose(np.array(v[4:8], dtype=float), CAMERA_FROM_ROTATED)
             out.write(" ".join(v[:4] + ["%.7f" % c for c in q]) + "\n")
 
 
