@@ -56,6 +56,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixe
                                    max_depth_gap_m, max_normal_angle_deg, normal_test_min_facing,
                                    max_radius_ratio, confidence_sigma, stable_confidence,
                                    unstable_frames, fill_weight, fill_stable_confidence,
+                                   confirm_fills_across_keyframes,
                                    fill_unstable_frames, free_space_margin, free_space_penalty,
                                    max_neighbour_step, merge_copies_every, normal_filter_px,
                                    normal_filter_depth_m, normal_baseline_px, max_surfels)

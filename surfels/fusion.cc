@@ -345,6 +345,8 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
   // Merge and create, one pixel after the other (several pixels may update one surfel).
   const Eigen::Matrix3f r_wc = m.world_from_camera.RotationMatrix().cast<float>();
   const Eigen::Vector3f t_wc = m.world_from_camera.translation().cast<float>();
+  const uint8_t sensor = static_cast<uint8_t>(DepthSource::kSensor);
+  const bool fill = m.source != DepthSource::kSensor;
   // Pixel order is not map order: the surfel kPrefetch pixels ahead is fetched early.
   for (size_t j = 0; j < results.size(); ++j) {
     if (j + kPrefetch < results.size() && results[j + kPrefetch].match >= 0)
@@ -362,7 +364,10 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
         BlendInto(&s, a, p, n, res.red, res.green, res.blue);
         s.radius = (c * s.radius + a * res.radius) / sum;
       }
-      s.confidence = sum;
+      s.confidence = fill && s.source != sensor
+                         ? FillConfidence(s, sum, m.keyframe, in_camera_[res.match].z(),
+                                          res.point.z())
+                         : sum;
       s.last_frame = frame_;
       s.keyframe = m.keyframe;
       TouchGeometry(index);
@@ -383,6 +388,14 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
       ++stats->created;
     }
   }
+}
+
+float SurfelFusion::FillConfidence(const Surfel& s, float confidence, int other_keyframe, float z,
+                                   float other_z) const {
+  if (!options_.confirm_fills_across_keyframes || s.keyframe == other_keyframe ||
+      !(std::abs(z - other_z) <= options_.free_space_margin * std::max(z, other_z)))
+    return confidence;
+  return std::max(confidence, static_cast<float>(options_.fill_stable_confidence));
 }
 
 bool SurfelFusion::IsStable(const Surfel& s) const {

@@ -27,7 +27,8 @@
 //     first, then the stable ones seen longest ago).
 // Radius: sqrt(2) z / f / |n_z|, at most twice the head-on radius. Fills count fill_weight of a
 // sensor measurement, so one keyframe's fill alone never reaches fill_stable_confidence: a fill
-// becomes part of the model only when other keyframes' fills or the sensor confirm it.
+// becomes part of the model only when another keyframe's fill agrees with it (within
+// free_space_margin in depth: confirm_fills_across_keyframes) or the sensor confirms it.
 //
 // Per-pixel and per-surfel loops run in parallel through cv::parallel_for_ (the caller's
 // cv::setNumThreads decides how many threads); the object itself owns no thread.
@@ -71,6 +72,12 @@ struct FusionOptions {
   int unstable_frames = 20;              // unstable surfels not updated this many frames go
   double fill_weight = 0.5;              // a filled pixel's weight relative to a sensor pixel's
   double fill_stable_confidence = 0.75;  // a fill is confirmed (stable) from this confidence
+  // A fill that another keyframe's fill finds on the same surface (depths within
+  // free_space_margin of each other, at association or when copies merge) is confirmed at once,
+  // whatever the two pixels' weights: two keyframes' pairs agree. Without it a fill is confirmed
+  // only when its summed weights reach fill_stable_confidence, which at the stereo's usual
+  // per-pixel confidences takes four or more keyframes.
+  bool confirm_fills_across_keyframes = true;
   int fill_unstable_frames = 90;         // unconfirmed fills older than this many frames go
   double free_space_margin = 0.03;       // relative depth by which the sensor must see past a
                                          // surfel to contradict it
@@ -191,6 +198,11 @@ class SurfelFusion {
   int NearestAlongRay(const StepConstants& k, int x, int y, const cv::Vec2f& ray,
                       const PixelResult& res) const;
   void Integrate(const Measurement& m, const std::vector<PixelResult>& results, FusionStats* stats);
+  // The confidence of fill surfel s after another fill, of `other_keyframe`, with depth
+  // `other_z` (s's own at this step: `z`, both in one camera), adds `confidence` to s's: at least
+  // fill_stable_confidence when the two are of different keyframes and agree in depth.
+  float FillConfidence(const Surfel& s, float confidence, int other_keyframe, float z,
+                       float other_z) const;
   // The entries of this step (the surfels of the chunks in view) and the index map: culling, then
   // ProjectEntries (each entry's position in the camera and its pixel), then NearestPerPixel (the
   // nearest entry per pixel and its front data).

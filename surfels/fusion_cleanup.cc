@@ -132,14 +132,22 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
   const std::vector<int32_t>& partner = partner_;
   for (size_t e = 0; e < partner.size(); ++e) {
     if (partner[e] < 0) continue;
-    size_t keep = visible_[partner[e]], drop = visible_[e];
+    size_t keep_entry = partner[e], drop_entry = e;
+    if (map_[visible_[drop_entry]].confidence > map_[visible_[keep_entry]].confidence)
+      std::swap(keep_entry, drop_entry);
+    const size_t keep = visible_[keep_entry], drop = visible_[drop_entry];
     if (map_[keep].removed() || map_[drop].removed()) continue;  // merged already this step
-    if (map_[drop].confidence > map_[keep].confidence) std::swap(keep, drop);
     Surfel& k = map_[keep];
     const Surfel& d = map_[drop];
     BlendInto(&k, d.confidence, d.position, d.normal, d.red, d.green, d.blue);
     k.radius = std::min(k.radius, d.radius);
-    k.confidence += d.confidence;
+    // Two fills of different keyframes on one surface confirm each other (FindCopies has checked
+    // their depths; in_camera_ holds both at this step).
+    const uint8_t sensor = static_cast<uint8_t>(DepthSource::kSensor);
+    k.confidence = k.source != sensor && d.source != sensor
+                       ? FillConfidence(k, k.confidence + d.confidence, d.keyframe,
+                                        in_camera_[keep_entry].z(), in_camera_[drop_entry].z())
+                       : k.confidence + d.confidence;
     k.first_frame = std::min(k.first_frame, d.first_frame);
     if (d.last_frame > k.last_frame) {  // it moves with the keyframe that saw it last
       k.last_frame = d.last_frame;

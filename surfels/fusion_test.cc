@@ -341,6 +341,39 @@ TEST(SurfelFusion, AFillNeedsASecondKeyframeToBecomeStable) {
 // surfels lie on the scene's surfaces, and cover what the sensor measures of it but not the
 // materials it cannot measure (ScoreMap against the scene's mesh, counting the surfaces the first
 // frames saw).
+// Stereo confidences are often well under 1, so two fills' summed weights stay short of
+// fill_stable_confidence; what confirms a fill is a second keyframe's fill agreeing in depth
+// (within free_space_margin), not the same keyframe's fill again nor one that lies off the surface.
+TEST(SurfelFusion, AFillOfAnotherKeyframeThatAgreesConfirmsItWhateverTheWeights) {
+  const Camera camera = SmallCamera();
+  const SE3 pose = At(0, 0, 0), moved = At(0.01, 0, 0);
+  const cv::Mat confidence(camera.height, camera.width, CV_32FC1, cv::Scalar(0.3f));
+  cv::Mat mask = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+  mask(cv::Rect(60, 40, 30, 30)).setTo(255);
+  const int stereo = static_cast<int>(DepthSource::kStereo);
+  // The second fill: keyframe and wall depth (metres); the stable fill surfels after both.
+  auto stable_after = [&](int second_keyframe, float second_wall_z, bool confirm,
+                          double margin = FusionOptions().free_space_margin) {
+    FusionOptions options;
+    options.confirm_fills_across_keyframes = confirm;
+    options.free_space_margin = margin;
+    SurfelFusion fusion(camera, options);
+    const RgbdFrame wall = Wall(camera, pose);
+    fusion.FuseFill(wall, wall.depth, mask, confidence, DepthSource::kStereo, pose, 0);
+    const RgbdFrame again = Wall(camera, moved, second_wall_z);
+    fusion.FuseFill(again, again.depth, mask, confidence, DepthSource::kStereo, moved,
+                    second_keyframe);
+    EXPECT_GT(fusion.Counts().stable[stereo] + fusion.Counts().unstable[stereo], 100);
+    return fusion.Counts().stable[stereo];
+  };
+  EXPECT_GT(stable_after(1, 1.5f, true), 100);
+  EXPECT_EQ(stable_after(1, 1.5f, false), 0);  // 0.3 * 0.5 twice is under 0.75
+  EXPECT_EQ(stable_after(0, 1.5f, true), 0);   // the same keyframe's fill again
+  // 4.8 cm behind: within the association's 5 cm gap, beyond 3% of the depth (and within 4%).
+  EXPECT_EQ(stable_after(1, 1.548f, true), 0);
+  EXPECT_GT(stable_after(1, 1.548f, true, 0.04), 100);
+}
+
 TEST(SurfelFusion, TheSyntheticTableFusedWithTruePosesLiesOnItsSurfaces) {
   testing::TempDir dir;
   synth::SynthOptions options;
