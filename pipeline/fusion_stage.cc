@@ -168,6 +168,15 @@ void FusionStage::ApplyCorrections() {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
 }
 
+cv::Mat FusionStage::RenderFills(const SE3& world_from_camera) {
+  GF_CHECK(!maps_.empty(), "fusion stage: no map to render");
+  cv::Mat source;
+  cv::Mat depth = maps_.front().fusion.RenderDepth(world_from_camera, &source);
+  depth.setTo(0, source == static_cast<uint8_t>(DepthSource::kNone));
+  depth.setTo(0, source == static_cast<uint8_t>(DepthSource::kSensor));
+  return depth;
+}
+
 bool FusionStage::Prediction(int frames, std::chrono::milliseconds timeout, cv::Mat* depth,
                              SE3* world_from_camera) {
   std::unique_lock<std::mutex> lock(prediction_mutex_);

@@ -52,6 +52,10 @@ struct FusionStageOptions {
   // After each frame, render the first variant's model at that frame's pose for frame-to-model
   // tracking (Prediction()).
   bool predict = false;
+  // At the end of a run with the fill, each keyframe's holes that its own fill left empty take
+  // the final model's depth where the model's nearest surfel there is a fill (RenderFills): fills
+  // of other keyframes, confirmed across keyframes (FusionOptions), seen from this one.
+  bool complete_keyframes = true;
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -82,6 +86,9 @@ class FusionStage {
                   SE3* world_from_camera);
   // report.json's "surfels" for variant `index`.
   nlohmann::ordered_json Report(size_t index = 0) const;
+  // After Finish(): the first variant's model seen from world_from_camera (at the final
+  // corrections) where its nearest stable surfel is a fill; CV_32F metres, 0 elsewhere.
+  cv::Mat RenderFills(const SE3& world_from_camera);
 
  private:
   struct Item {

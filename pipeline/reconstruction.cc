@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <map>
 #include <thread>
 
 #include "acquisition/errors.h"
@@ -137,6 +138,39 @@ Trajectory CorrectedTrajectory(const TrackingRecord& tracking, const PoseCorrect
     out[i].world_from_camera =
         PoseCorrections::Lookup(c, tracking.keyframe[i]) * out[i].world_from_camera;
   return out;
+}
+
+// Each filled keyframe's holes that its own fill left empty, completed from the final model's
+// fills at the keyframe's final pose (FusionStageOptions::complete_keyframes). A keyframe that
+// cannot be completed stays as its fill left it (a warning); the others go on. report.json's
+// fill.model_completion.
+// `stop` is asked before each keyframe (true: the rest stay as they are).
+json CompleteKeyframes(const FillStage& fill, FusionStage* fusion, const Trajectory& trajectory,
+                       const std::vector<std::string>& names, RunSink* sink,
+                       const std::function<bool()>& stop, std::vector<std::string>* warnings) {
+  std::map<std::string, SE3> poses;  // by frame name (trajectory entry i is frame names[i])
+  for (size_t i = 0; i < trajectory.size() && i < names.size(); ++i)
+    poses[names[i]] = trajectory[i].world_from_camera;
+  const auto start = Clock::now();
+  int keyframes = 0;
+  long pixels = 0;
+  for (const KeyframeFill& k : fill.keyframes()) {
+    if (stop()) break;
+    const auto pose = poses.find(k.timestamp);
+    if (!k.failure.empty() || pose == poses.end()) continue;
+    try {
+      const int completed = sink->CompleteKeyframe(k.timestamp, fusion->RenderFills(pose->second));
+      keyframes += completed > 0;
+      pixels += completed;
+    } catch (const std::exception& e) {
+      warnings->push_back("keyframe " + k.timestamp + " not completed from the model: " + e.what());
+      spdlog::warn("{}", warnings->back());
+    }
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  spdlog::info("model completion: {} hole pixels of {} keyframes from the map's fills, {:.1f} s",
+               pixels, keyframes, seconds);
+  return {{"keyframes", keyframes}, {"pixels", pixels}, {"seconds", seconds}};
 }
 
 // Runs `finish`, keeping the first error of the run.
@@ -291,8 +325,22 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   if (s->fusion) FinishStage([&] { s->fusion->Finish(poll); }, &error);
   if (!error && stop_reason.empty() && s->tracker->record().frames == 0)
     error = std::make_exception_ptr(InputError(source.Input(), "no frames in the selected range"));
+  // A complete run's keyframes take what the final model knows of their holes.
+  json completion;
+  std::vector<std::string> completion_warnings;
+  if (s->fill && s->fusion && options_.fusion_options.complete_keyframes && !error &&
+      stop_reason.empty())
+    completion = CompleteKeyframes(*s->fill, s->fusion.get(),
+                                   CorrectedTrajectory(s->tracker->record(), s->corrections),
+                                   s->tracker->record().names, sink, poll,
+                                   &completion_warnings);
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   ReconstructionSummary summary = Summarise(source, *s, error, stop_reason, seconds);
+  if (!completion.is_null()) summary.report["fill"]["model_completion"] = completion;
+  for (const std::string& w : completion_warnings) {
+    summary.warnings.push_back(w);
+    summary.report["warnings"].push_back(w);
+  }
   WriteOutputs(*s, sink, without_fill, &summary);
   poll();
   if (error) std::rethrow_exception(error);

@@ -4,8 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "acquisition/depth.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
@@ -24,6 +27,12 @@ cv::Mat ToMillimetres(const cv::Mat& depth_m) {
       mm.at<uint16_t>(y, x) = d > 0 ? static_cast<uint16_t>(std::min(65535.0, std::round(d))) : 0;
     }
   return mm;
+}
+
+// A trajectory entry's frame name (KeyframeName) where its stamp is the text read or the index.
+std::string PoseName(const StampedPose& pose) {
+  return pose.timestamp_text.empty() ? std::to_string(static_cast<long>(pose.timestamp))
+                                     : pose.timestamp_text;
 }
 
 bool LooksLikeRun(const fs::path& dir) {
@@ -46,6 +55,21 @@ std::string StampOfIndexedName(const std::string& name) {
   const size_t dot = name.rfind(".png");
   if (underscore == std::string::npos || dot == std::string::npos || dot <= underscore) return "";
   return name.substr(underscore + 1, dot - underscore - 1);
+}
+
+int CompleteFromModel(const cv::Mat& hole_mask, const cv::Mat& model_depth, cv::Mat* filled_depth,
+                      cv::Mat* completed) {
+  GF_CHECK(hole_mask.type() == CV_8UC1 && model_depth.type() == CV_32FC1 &&
+               filled_depth->type() == CV_32FC1 && hole_mask.size() == model_depth.size() &&
+               filled_depth->size() == model_depth.size(),
+           "completion: CV_8U holes, CV_32F depths of one size");
+  // Not in projector shadows: there the far surface is what colour sees, and a fill in front of
+  // it in the model is the near surface's fill spread past its edge (the keyframe's own fill
+  // tests shadows against both sides; ValidateAndFill).
+  *completed = (hole_mask != 0) & (hole_mask != static_cast<uint8_t>(HoleCode::kShadow)) &
+               (*filled_depth <= 0) & (model_depth > 0);
+  model_depth.copyTo(*filled_depth, *completed);
+  return cv::countNonZero(*completed);
 }
 
 cv::Mat FillOverlay(const cv::Mat& color, const CarriedFillResult& fill) {
@@ -118,30 +142,56 @@ void FolderRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& fram
   const fs::path pinhole = fs::path(out_dir_) / "undistorted";
   for (const char* sub : {"color", "depth"}) fs::create_directories(pinhole / sub, ec);
   if (ec) throw InputError(pinhole.string(), "cannot create folder: " + ec.message());
-  auto undistort = [&](const cv::Mat& image, int interpolation) {
-    if (undistort_x_.empty()) return image;
-    cv::Mat out;
-    cv::remap(image, out, undistort_x_, undistort_y_, interpolation, cv::BORDER_CONSTANT, 0);
-    return out;
-  };
   WriteImage((pinhole / "depth" / file).string(),
-             undistort(ToMillimetres(fill.filled_depth), cv::INTER_NEAREST));
+             Undistort(ToMillimetres(fill.filled_depth), cv::INTER_NEAREST));
   if (has_color)
-    WriteImage((pinhole / "color" / file).string(), undistort(frame.color, cv::INTER_LINEAR));
+    WriteImage((pinhole / "color" / file).string(), Undistort(frame.color, cv::INTER_LINEAR));
   std::lock_guard<std::mutex> lock(mutex_);
-  keyframes_[frame.index] = name;
+  keyframes_[frame.index] = {name, file};
+}
+
+cv::Mat FolderRunSink::Undistort(const cv::Mat& image, int interpolation) const {
+  if (undistort_x_.empty()) return image;
+  cv::Mat out;
+  cv::remap(image, out, undistort_x_, undistort_y_, interpolation, cv::BORDER_CONSTANT, 0);
+  return out;
+}
+
+int FolderRunSink::CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) {
+  std::string pinhole_file;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& [index, written] : keyframes_)
+      if (written.name == name) pinhole_file = written.pinhole_file;
+  }
+  if (pinhole_file.empty()) throw std::out_of_range("no keyframe " + name + " written");
+  const std::string base = (fs::path(out_dir_) / "keyframes" / name).string();
+  const cv::Mat mm = cv::imread(base + ".depth_filled.png", cv::IMREAD_UNCHANGED);
+  const cv::Mat holes = cv::imread(base + ".hole_mask.png", cv::IMREAD_UNCHANGED);
+  if (mm.type() != CV_16UC1 || holes.type() != CV_8UC1 || mm.size() != holes.size() ||
+      mm.size() != model_depth.size())
+    throw InputError(base + ".depth_filled.png",
+                     "cannot be read back with its hole mask at the camera's size");
+  cv::Mat filled, completed;
+  mm.convertTo(filled, CV_32F, 0.001);
+  const int pixels = CompleteFromModel(holes, model_depth, &filled, &completed);
+  if (pixels == 0) return 0;
+  const cv::Mat completed_mm = ToMillimetres(filled);
+  WriteImage(base + ".depth_filled.png", completed_mm);
+  WriteImage(base + ".model_fill.png", completed);
+  WriteImage((fs::path(out_dir_) / "undistorted" / "depth" / pinhole_file).string(),
+             Undistort(completed_mm, cv::INTER_NEAREST));
+  return pixels;
 }
 
 void FolderRunSink::WriteTrajectory(const Trajectory& trajectory) {
   WriteTumTrajectory((fs::path(out_dir_) / "trajectory.txt").string(), trajectory);
   std::map<std::string, SE3> poses;
-  for (const StampedPose& p : trajectory)
-    poses[p.timestamp_text.empty() ? std::to_string(static_cast<long>(p.timestamp))
-                                   : p.timestamp_text] = p.world_from_camera;
+  for (const StampedPose& p : trajectory) poses[PoseName(p)] = p.world_from_camera;
   Trajectory keyframes;  // undistorted/trajectory.log: entry k is the k-th file, by name
   std::lock_guard<std::mutex> lock(mutex_);
-  for (const auto& [index, name] : keyframes_) {
-    const auto pose = poses.find(name);
+  for (const auto& [index, written] : keyframes_) {
+    const auto pose = poses.find(written.name);
     if (pose == poses.end()) continue;  // a keyframe whose pose the run did not keep
     keyframes.push_back({static_cast<double>(keyframes.size()), "", pose->second});
   }
@@ -186,6 +236,12 @@ void InMemoryRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& fr
                                     const CarriedFillResult& fill) {
   std::lock_guard<std::mutex> lock(mutex_);
   keyframes[name] = {frame, fill};
+}
+
+int InMemoryRunSink::CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Keyframe& k = keyframes.at(name);
+  return CompleteFromModel(k.frame.hole_mask, model_depth, &k.fill.filled_depth, &k.model_fill);
 }
 
 void InMemoryRunSink::WriteTrajectory(const Trajectory& t) {

@@ -50,6 +50,11 @@ class RunSink {
   virtual void WriteReport(const nlohmann::ordered_json& report) = 0;
   // map.ply (surfels/ply.h): the stable surfels of the run's surfel map.
   virtual void WriteMap(const std::vector<Surfel>& surfels) = 0;
+  // Completes keyframe `name` (written before) from the model: its hole pixels that its filled
+  // depth leaves empty take model_depth (CV_32F metres, 0 = none) where it has one
+  // (CompleteFromModel). Returns the pixels completed. Throws InputError when the keyframe cannot
+  // be read back or rewritten, std::out_of_range when no keyframe of that name was written.
+  virtual int CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) = 0;
   // Where the outputs go, for messages ("memory" for the in-memory sink).
   virtual std::string Where() const = 0;
 };
@@ -67,14 +72,23 @@ class FolderRunSink : public RunSink {
   void WriteCamera(const CameraFile& camera) override;
   void WriteReport(const nlohmann::ordered_json& report) override;
   void WriteMap(const std::vector<Surfel>& surfels) override;
+  // Rewrites <name>.depth_filled.png and the pinhole depth, and writes <name>.model_fill.png (255
+  // where the model completed the keyframe).
+  int CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) override;
   std::string Where() const override { return out_dir_; }
 
  private:
+  // image on the pinhole camera (as it is without distortion).
+  cv::Mat Undistort(const cv::Mat& image, int interpolation) const;
   std::string out_dir_;
   // cv::remap maps onto the pinhole camera, set by WriteCamera; empty: no distortion.
   cv::Mat undistort_x_, undistort_y_;
   std::mutex mutex_;
-  std::map<int, std::string> keyframes_;  // written keyframes: frame index -> KeyframeName
+  struct Written {
+    std::string name;          // KeyframeName
+    std::string pinhole_file;  // its file in undistorted/color and undistorted/depth
+  };
+  std::map<int, Written> keyframes_;  // written keyframes by frame index
 };
 
 // Keeps everything in memory, for tests.
@@ -82,7 +96,8 @@ class InMemoryRunSink : public RunSink {
  public:
   struct Keyframe {
     RgbdFrame frame;
-    CarriedFillResult fill;
+    CarriedFillResult fill;  // filled_depth completed by CompleteKeyframe
+    cv::Mat model_fill;      // CV_8U: 255 where CompleteKeyframe completed it (empty before)
   };
   void WriteKeyframe(const std::string& name, const RgbdFrame& frame,
                      const CarriedFillResult& fill) override;
@@ -90,6 +105,7 @@ class InMemoryRunSink : public RunSink {
   void WriteCamera(const CameraFile& camera) override;
   void WriteReport(const nlohmann::ordered_json& report) override;
   void WriteMap(const std::vector<Surfel>& surfels) override;
+  int CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) override;
   std::string Where() const override { return "memory"; }
 
   // Read after the run.
@@ -109,6 +125,12 @@ class InMemoryRunSink : public RunSink {
 // by name, they are in number order. StampOfIndexedName gives the timestamp back ("" when none).
 std::string IndexedFileName(int number, const std::string& timestamp);
 std::string StampOfIndexedName(const std::string& name);
+
+// Sets *filled_depth (CV_32F metres) to model_depth (same size, 0 = none) on the pixels of
+// hole_mask (CV_8U, non-zero: the sensor's holes) that it leaves empty; *completed (CV_8U) gets 255
+// there. Returns their count.
+int CompleteFromModel(const cv::Mat& hole_mask, const cv::Mat& model_depth, cv::Mat* filled_depth,
+                      cv::Mat* completed);
 
 // The overlay written as <ts>.fill_overlay.png (see above).
 cv::Mat FillOverlay(const cv::Mat& color, const CarriedFillResult& fill);

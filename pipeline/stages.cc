@@ -126,6 +126,7 @@ void TrackStage::Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker) 
   }
   record_.trajectory.push_back({frame.timestamp, frame.timestamp_text, r.world_from_camera});
   record_.keyframe.push_back(keyframe);
+  record_.names.push_back(KeyframeName(frame));
 }
 
 void TrackStage::OfferKeyframe(const RgbdFrame& frame, const TrackingResult& r, int keyframe) {

@@ -57,6 +57,7 @@ class ReadStage {
 struct TrackingRecord {
   Trajectory trajectory;           // the frames with a pose, as tracked
   std::vector<int> keyframe;       // per trajectory entry: the keyframe it was tracked against
+  std::vector<std::string> names;  // ... and its frame's KeyframeName
   std::vector<std::string> lost_frames;  // names of the frames without a pose
   int relocalised = 0, restarted = 0;
   std::vector<double> read_ms, track_ms;

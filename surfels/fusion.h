@@ -142,8 +142,9 @@ class SurfelFusion {
   // Bytes the map holds (capacity), for the memory figures.
   size_t MemoryBytes() const;
   // The stable surfels' depth seen from world_from_camera (CV_32F metres, 0 = none): discs of their
-  // radius, nearest first; what frame-to-model tracking aligns the next frame to.
-  cv::Mat RenderDepth(const SE3& world_from_camera);
+  // radius, nearest first; what frame-to-model tracking aligns the next frame to. front_source,
+  // when given, gets each pixel's nearest surfel's source (CV_8U DepthSource, kNone where none).
+  cv::Mat RenderDepth(const SE3& world_from_camera, cv::Mat* front_source = nullptr);
   // Moves every surfel with the keyframe it belongs to (Surfel::keyframe): by
   // world_correction_of_keyframe[k] (a transform of the world applied on the left), the last entry
   // for keyframes beyond the list; surfels of no keyframe (-1) stay. For a pose-graph correction.

@@ -181,9 +181,10 @@ void SurfelFusion::NearestPerPixel() {
   });
 }
 
-cv::Mat SurfelFusion::RenderDepth(const SE3& world_from_camera) {
+cv::Mat SurfelFusion::RenderDepth(const SE3& world_from_camera, cv::Mat* front_source) {
   const SE3 camera_from_world = world_from_camera.Inverse();
   cv::Mat depth = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1);
+  cv::Mat source = cv::Mat::zeros(depth.size(), CV_8UC1);
   chunks_.resize((map_.size() + kChunk - 1) / kChunk);
   const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
@@ -217,10 +218,14 @@ cv::Mat SurfelFusion::RenderDepth(const SE3& world_from_camera) {
           const float z = n_dot_q / along;
           if (!(z > 0) || (dir * z - q).squaredNorm() > s.radius * s.radius) continue;
           float& d = depth.at<float>(y, x);
-          if (d == 0.f || z < d) d = z;
+          if (d == 0.f || z < d) {
+            d = z;
+            source.at<uint8_t>(y, x) = s.source;
+          }
         }
     }
   }
+  if (front_source) *front_source = source;
   return depth;
 }
 
