@@ -179,6 +179,16 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const cv::Mat& mode
   const cv::Mat completed_mm = ToMillimetres(filled);
   WriteImage(base + ".depth_filled.png", completed_mm);
   WriteImage(base + ".model_fill.png", completed);
+  // The overlay shows the completed pixels orange (they were magenta: holes left empty).
+  const cv::Mat color = cv::imread(base + ".color.png", cv::IMREAD_COLOR);
+  cv::Mat overlay = cv::imread(base + ".fill_overlay.png", cv::IMREAD_COLOR);
+  if (!color.empty() && color.size() == overlay.size() && color.size() == completed.size()) {
+    cv::Mat tinted;
+    cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(0, 165, 255)), 0.5, 0,
+                    tinted);
+    tinted.copyTo(overlay, completed);
+    WriteImage(base + ".fill_overlay.png", overlay);
+  }
   WriteImage((fs::path(out_dir_) / "undistorted" / "depth" / pinhole_file).string(),
              Undistort(completed_mm, cv::INTER_NEAREST));
   return pixels;
