@@ -141,21 +141,21 @@ Trajectory CorrectedTrajectory(const TrackingRecord& tracking, const PoseCorrect
 }
 
 // Each filled keyframe's holes that its own fill left empty, completed from the final model's
-// fills at the keyframe's final pose (FusionStageOptions::complete_keyframes). A keyframe that
-// cannot be completed stays as its fill left it (a warning); the others go on. report.json's
-// fill.model_completion.
-// `stop` is asked before each keyframe (true: the rest stay as they are).
-json CompleteKeyframes(const FillStage& fill, FusionStage* fusion, const Trajectory& trajectory,
-                       const std::vector<std::string>& names, RunSink* sink,
-                       const std::function<bool()>& stop, std::vector<std::string>* warnings) {
+// fills at the keyframe's final pose. A keyframe that cannot be completed stays as its fill left
+// it (a warning); the others go on. `stop` is asked before each keyframe (true: the rest stay as
+// they are). report.json's fill.model_completion.
+json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajectory& trajectory,
+                     const std::vector<std::string>& names, RunSink* sink,
+                     const std::function<bool()>& stop, std::vector<std::string>* warnings) {
   std::map<std::string, SE3> poses;  // by frame name (trajectory entry i is frame names[i])
   for (size_t i = 0; i < trajectory.size() && i < names.size(); ++i)
     poses[names[i]] = trajectory[i].world_from_camera;
   const auto start = Clock::now();
   int keyframes = 0;
   long pixels = 0;
+  bool stopped = false;
   for (const KeyframeFill& k : fill.keyframes()) {
-    if (stop()) break;
+    if ((stopped = stop())) break;
     const auto pose = poses.find(k.timestamp);
     if (!k.failure.empty() || pose == poses.end()) continue;
     try {
@@ -170,7 +170,7 @@ json CompleteKeyframes(const FillStage& fill, FusionStage* fusion, const Traject
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   spdlog::info("model completion: {} hole pixels of {} keyframes from the map's fills, {:.1f} s",
                pixels, keyframes, seconds);
-  return {{"keyframes", keyframes}, {"pixels", pixels}, {"seconds", seconds}};
+  return {{"keyframes", keyframes}, {"pixels", pixels}, {"seconds", seconds}, {"stopped", stopped}};
 }
 
 // Runs `finish`, keeping the first error of the run.
@@ -253,8 +253,8 @@ ReconstructionSummary Reconstruction::Summarise(const FrameSource& source, const
   if (summary.most_lost)
     summary.warnings.push_back("tracking was lost on " + std::to_string(summary.lost) + " of " +
                                std::to_string(summary.frames) + " frames");
-  summary.report = MakeReport(options_, source, tracking, s.fill.get(), s.fusion.get(),
-                              s.loop.get(), summary);
+  summary.report =
+      MakeReport(options_, source, tracking, s.fill.get(), s.fusion.get(), s.loop.get(), summary);
   return summary;
 }
 
@@ -272,6 +272,21 @@ void Reconstruction::WriteOutputs(const Stages& s, RunSink* sink, RunSink* witho
   summary->report_without_fill["surfels"] = s.fusion->Report(1);
   without_fill->WriteTrajectory(trajectory);
   without_fill->WriteReport(summary->report_without_fill);
+}
+
+void Reconstruction::CompleteKeyframes(const Stages& s, RunSink* sink,
+                                       const std::function<bool()>& stop,
+                                       ReconstructionSummary* summary) const {
+  if (!s.fill || !s.fusion || !options_.fusion_options.complete_keyframes) return;
+  std::vector<std::string> warnings;
+  summary->report["fill"]["model_completion"] = CompleteFromMap(
+      *s.fill, s.fusion.get(), CorrectedTrajectory(s.tracker->record(), s.corrections),
+      s.tracker->record().names, sink, stop, &warnings);
+  for (const std::string& w : warnings) {
+    summary->warnings.push_back(w);
+    summary->report["warnings"].push_back(w);
+  }
+  sink->WriteReport(summary->report);
 }
 
 ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
@@ -325,23 +340,10 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   if (s->fusion) FinishStage([&] { s->fusion->Finish(poll); }, &error);
   if (!error && stop_reason.empty() && s->tracker->record().frames == 0)
     error = std::make_exception_ptr(InputError(source.Input(), "no frames in the selected range"));
-  // A complete run's keyframes take what the final model knows of their holes.
-  json completion;
-  std::vector<std::string> completion_warnings;
-  if (s->fill && s->fusion && options_.fusion_options.complete_keyframes && !error &&
-      stop_reason.empty())
-    completion = CompleteKeyframes(*s->fill, s->fusion.get(),
-                                   CorrectedTrajectory(s->tracker->record(), s->corrections),
-                                   s->tracker->record().names, sink, poll,
-                                   &completion_warnings);
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   ReconstructionSummary summary = Summarise(source, *s, error, stop_reason, seconds);
-  if (!completion.is_null()) summary.report["fill"]["model_completion"] = completion;
-  for (const std::string& w : completion_warnings) {
-    summary.warnings.push_back(w);
-    summary.report["warnings"].push_back(w);
-  }
   WriteOutputs(*s, sink, without_fill, &summary);
+  if (summary.complete) CompleteKeyframes(*s, sink, poll, &summary);
   poll();
   if (error) std::rethrow_exception(error);
   return summary;

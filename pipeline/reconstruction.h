@@ -121,6 +121,11 @@ class Reconstruction {
                                   double seconds) const;
   void WriteOutputs(const Stages& s, RunSink* sink, RunSink* without_fill,
                     ReconstructionSummary* summary) const;
+  // After a complete run's outputs are written: each keyframe completed from the final map
+  // (FusionStageOptions::complete_keyframes), then report.json written again with
+  // fill.model_completion. `stop` (true) leaves the keyframes not yet completed as they are.
+  void CompleteKeyframes(const Stages& s, RunSink* sink, const std::function<bool()>& stop,
+                         ReconstructionSummary* summary) const;
   ReconstructionOptions options_;
 };
 

@@ -157,7 +157,7 @@ TEST(Reconstruction, TheMapCompletesEachKeyframeFromItsFills) {
   ASSERT_TRUE(s.complete);
   const nlohmann::ordered_json& record = sink.report["fill"]["model_completion"];
   ASSERT_TRUE(record.is_object()) << sink.report["fill"].dump(2);
-  long completed = 0, good = 0, outside_holes = 0;
+  long completed = 0, good = 0, outside_holes = 0, in_shadows = 0;
   for (const auto& [name, k] : sink.keyframes) {
     if (k.model_fill.empty()) continue;
     const int i = k.frame.index;
@@ -166,6 +166,8 @@ TEST(Reconstruction, TheMapCompletesEachKeyframeFromItsFills) {
         if (!k.model_fill.at<uint8_t>(y, x)) continue;
         ++completed;
         outside_holes += k.frame.hole_mask.at<uint8_t>(y, x) == 0;
+        in_shadows +=
+            k.frame.hole_mask.at<uint8_t>(y, x) == static_cast<uint8_t>(HoleCode::kShadow);
         const double z = k.fill.filled_depth.at<float>(y, x),
                      t = c.visible_depth[i].at<float>(y, x);
         good += t > 0 && std::abs(z - t) <= 0.03 * t;
@@ -176,7 +178,9 @@ TEST(Reconstruction, TheMapCompletesEachKeyframeFromItsFills) {
   EXPECT_EQ(completed, record["pixels"].get<long>());
   EXPECT_GT(completed, 200);
   EXPECT_EQ(outside_holes, 0);
+  EXPECT_EQ(in_shadows, 0);  // the near object's fill spread past its edge would land there
   EXPECT_GT(good, 0.9 * completed);
+  EXPECT_FALSE(record["stopped"].get<bool>());
 }
 
 // A keyframe the fill cannot take (its colour has an alpha channel, which the stereo refuses) is

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <stdexcept>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
@@ -176,9 +176,12 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const cv::Mat& mode
   mm.convertTo(filled, CV_32F, 0.001);
   const int pixels = CompleteFromModel(holes, model_depth, &filled, &completed);
   if (pixels == 0) return 0;
+  // depth_filled.png (what users and the figures read) last: when an earlier write fails it stays
+  // as the keyframe's fill left it, and the warning says the keyframe was not completed.
   const cv::Mat completed_mm = ToMillimetres(filled);
-  WriteImage(base + ".depth_filled.png", completed_mm);
   WriteImage(base + ".model_fill.png", completed);
+  WriteImage((fs::path(out_dir_) / "undistorted" / "depth" / pinhole_file).string(),
+             Undistort(completed_mm, cv::INTER_NEAREST));
   // The overlay shows the completed pixels orange (they were magenta: holes left empty).
   const cv::Mat color = cv::imread(base + ".color.png", cv::IMREAD_COLOR);
   cv::Mat overlay = cv::imread(base + ".fill_overlay.png", cv::IMREAD_COLOR);
@@ -189,8 +192,7 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const cv::Mat& mode
     tinted.copyTo(overlay, completed);
     WriteImage(base + ".fill_overlay.png", overlay);
   }
-  WriteImage((fs::path(out_dir_) / "undistorted" / "depth" / pinhole_file).string(),
-             Undistort(completed_mm, cv::INTER_NEAREST));
+  WriteImage(base + ".depth_filled.png", completed_mm);
   return pixels;
 }
 

@@ -101,8 +101,8 @@ class TrackStage {
   FusionStage* fusion_;
   LoopClosureStage* loop_;
   bool frame_to_model_;
-  int last_keyframe_ = -1;   // the newest keyframe handed to loop closure
-  SE3 last_keyframe_pose_;   // ... its tracked pose
+  int last_keyframe_ = -1;  // the newest keyframe handed to loop closure
+  SE3 last_keyframe_pose_;  // ... its tracked pose
   std::atomic<bool> stop_{false};
   std::atomic<int> frames_{0};
   int offered_to_fusion_ = 0;  // frames handed to the fusion stage

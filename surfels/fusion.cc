@@ -364,10 +364,10 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
         BlendInto(&s, a, p, n, res.red, res.green, res.blue);
         s.radius = (c * s.radius + a * res.radius) / sum;
       }
-      s.confidence = fill && s.source != sensor
-                         ? FillConfidence(s, sum, m.keyframe, in_camera_[res.match].z(),
-                                          res.point.z())
-                         : sum;
+      s.confidence =
+          fill && s.source != sensor
+              ? FillConfidence(s, sum, m.keyframe, in_camera_[res.match].z(), res.point.z())
+              : sum;
       s.last_frame = frame_;
       s.keyframe = m.keyframe;
       TouchGeometry(index);
@@ -434,8 +434,7 @@ size_t SurfelFusion::MemoryBytes() const {
          normal_radius_.capacity() * sizeof(Eigen::Vector4f) +
          results_.capacity() * sizeof(PixelResult) +
          (pixel_of_.capacity() + visible_.capacity() + partner_.capacity()) * sizeof(int32_t) +
-         seen_through_.capacity() + entry_flags_.capacity() +
-         chunks_.capacity() * sizeof(Chunk);
+         seen_through_.capacity() + entry_flags_.capacity() + chunks_.capacity() * sizeof(Chunk);
 }
 
 void SurfelFusion::MoveWithKeyframes(const std::vector<SE3>& correction) {

@@ -78,11 +78,11 @@ struct FusionOptions {
   // only when its summed weights reach fill_stable_confidence, which at the stereo's usual
   // per-pixel confidences takes four or more keyframes.
   bool confirm_fills_across_keyframes = true;
-  int fill_unstable_frames = 90;         // unconfirmed fills older than this many frames go
-  double free_space_margin = 0.03;       // relative depth by which the sensor must see past a
-                                         // surfel to contradict it
-  double free_space_penalty = 1.0;       // confidence a stable surfel loses per contradiction
-  double max_neighbour_step = 0.05;      // normals only from neighbours within this relative step
+  int fill_unstable_frames = 90;     // unconfirmed fills older than this many frames go
+  double free_space_margin = 0.03;   // relative depth by which the sensor must see past a
+                                     // surfel to contradict it
+  double free_space_penalty = 1.0;   // confidence a stable surfel loses per contradiction
+  double max_neighbour_step = 0.05;  // normals only from neighbours within this relative step
   // Copies of a surface (step 5) are merged after every this many sensor frames: the pass costs
   // about a sixth of a frame's fusion, and a copy that waits is only hidden behind the surfel it
   // copies meanwhile (association never reaches it), so the model is the same a few frames later.
@@ -251,8 +251,8 @@ class SurfelFusion {
     }
   };
   std::vector<Chunk> chunks_;
-  std::vector<uint8_t> in_view_;      // per chunk, in view this step
-  std::vector<size_t> entry_offset_;  // per chunk in view, its first entry
+  std::vector<uint8_t> in_view_;                   // per chunk, in view this step
+  std::vector<size_t> entry_offset_;               // per chunk in view, its first entry
   float view_x_[2] = {0, 0}, view_y_[2] = {0, 0};  // the image's extent in x/z and y/z
 
   Camera camera_;

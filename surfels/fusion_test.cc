@@ -336,11 +336,6 @@ TEST(SurfelFusion, AFillNeedsASecondKeyframeToBecomeStable) {
   for (int i = 0; i < 100; ++i) fusion.FuseFrame(nothing, pose, 1);
   EXPECT_GT(fusion.Counts().stable[static_cast<int>(DepthSource::kStereo)], 100);
 }
-
-// The synthetic glass table fused with its true poses (sensor depth only, 40 frames): the stable
-// surfels lie on the scene's surfaces, and cover what the sensor measures of it but not the
-// materials it cannot measure (ScoreMap against the scene's mesh, counting the surfaces the first
-// frames saw).
 // Stereo confidences are often well under 1, so two fills' summed weights stay short of
 // fill_stable_confidence; what confirms a fill is a second keyframe's fill agreeing in depth
 // (within free_space_margin), not the same keyframe's fill again nor one that lies off the surface.
@@ -374,6 +369,10 @@ TEST(SurfelFusion, AFillOfAnotherKeyframeThatAgreesConfirmsItWhateverTheWeights)
   EXPECT_GT(stable_after(1, 1.548f, true, 0.04), 100);
 }
 
+// The synthetic glass table fused with its true poses (sensor depth only, 40 frames): the stable
+// surfels lie on the scene's surfaces, and cover what the sensor measures of it but not the
+// materials it cannot measure (ScoreMap against the scene's mesh, counting the surfaces the first
+// frames saw).
 TEST(SurfelFusion, TheSyntheticTableFusedWithTruePosesLiesOnItsSurfaces) {
   testing::TempDir dir;
   synth::SynthOptions options;

@@ -87,9 +87,8 @@ void SurfelFusion::ProjectEntries(const SE3& camera_from_world) {
     const Eigen::Vector3f t = translation;
     const int width = camera_.width, height = camera_.height;
     const float fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
-    const float k1 = camera_.distortion[0], k2 = camera_.distortion[1],
-                p1 = camera_.distortion[2], p2 = camera_.distortion[3],
-                k3 = camera_.distortion[4];
+    const float k1 = camera_.distortion[0], k2 = camera_.distortion[1], p1 = camera_.distortion[2],
+                p2 = camera_.distortion[3], k3 = camera_.distortion[4];
     const float near = static_cast<float>(options_.min_depth_m * 0.5);
     const double stable_confidence = options_.stable_confidence,
                  fill_stable_confidence = options_.fill_stable_confidence;

@@ -18,6 +18,7 @@ string(JSON filled GET "${report}" fill filled_pixels)
 string(JSON fill_rate GET "${report}" fill fill_rate)
 string(JSON stereo_error GET "${report}" fill stereo_error_median_m)
 string(JSON carried GET "${report}" fill carried_pixels)
+string(JSON model_pixels GET "${report}" fill model_completion pixels)
 if(NOT written EQUAL keyframes OR holes LESS 1 OR filled LESS 1 OR carried LESS 1)
   message(FATAL_ERROR "fill report: ${keyframes} keyframes, ${written} written, ${filled} of ${holes}, ${carried} carried")
 endif()
@@ -59,7 +60,7 @@ endif()
 # than the rest. The pixels the map completed (model_fill.png) are holes, and filled.
 execute_process(COMMAND "${PYTHON}" -c "
 import cv2, glob, os, sys
-n = [0, 0, 0, 0]; on_sensor = 0; unset = 0
+n = [0, 0, 0, 0]; on_sensor = 0; unset = 0; completed = 0
 for p in glob.glob('${work}/run/keyframes/*.fill_confidence.png'):
     ts = os.path.basename(p)[:-len('.fill_confidence.png')]
     c = cv2.imread(p, -1).astype(float) / 255.0
@@ -76,13 +77,16 @@ for p in glob.glob('${work}/run/keyframes/*.fill_confidence.png'):
     high = c >= 0.75
     n[0] += int((hit & high).sum()); n[1] += int((good & high).sum())
     n[2] += int((hit & ~high).sum()); n[3] += int((good & ~high).sum())
-print(on_sensor, unset, n)
+    completed += int(model.sum())
+print(on_sensor, unset, n, completed)
 ok = on_sensor == 0 and unset == 0 and n[0] > 1000 and n[2] > 1000 and n[1] / n[0] > n[3] / n[2]
+ok = ok and completed == ${model_pixels} and completed > 0
 sys.exit(0 if ok else 1)"
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "fill_confidence.png (sensor pixels set, filled pixels unset, [high filled, "
-                      "high good, low filled, low good]): ${out} ${err}")
+                      "high good, low filled, low good], model_fill.png pixels against the "
+                      "report's ${model_pixels}): ${out} ${err}")
 endif()
 message("fill confidence (sensor pixels set, filled unset, [high filled, high good, low filled, "
         "low good]): ${out}")
