@@ -8,6 +8,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/stats.h"
 #include "pipeline/timing.h"
+#include "surfels/render.h"
 
 namespace gf {
 namespace {
@@ -32,8 +33,11 @@ const char* SourceName(size_t source) {
 }  // namespace
 
 bool FusionStageOptions::Check(std::string* message) const {
-  if (queue_capacity < 1 || count_every < 1) {
-    if (message) *message = "fusion stage: queue_capacity and count_every must be positive";
+  if (queue_capacity < 1 || count_every < 1 || completion_max_gap_px < 0) {
+    if (message)
+      *message =
+          "fusion stage: queue_capacity and count_every must be positive, "
+          "completion_max_gap_px non-negative";
     return false;
   }
   return fusion.Check(message);
@@ -172,8 +176,10 @@ cv::Mat FusionStage::RenderFills(const SE3& world_from_camera) {
   GF_CHECK(!maps_.empty(), "fusion stage: no map to render");
   cv::Mat source;
   cv::Mat depth = maps_.front().fusion.RenderDepth(world_from_camera, &source);
-  depth.setTo(0, source == static_cast<uint8_t>(DepthSource::kNone));
   depth.setTo(0, source == static_cast<uint8_t>(DepthSource::kSensor));
+  if (options_.completion_max_gap_px > 0)
+    CloseSplatGaps(&depth, source == static_cast<uint8_t>(DepthSource::kNone),
+                   options_.completion_max_gap_px, options_.fusion.free_space_margin);
   return depth;
 }
 

@@ -56,6 +56,11 @@ struct FusionStageOptions {
   // the final model's depth where the model's nearest surfel there is a fill (RenderFills): fills
   // of other keyframes, confirmed across keyframes (FusionOptions), seen from this one.
   bool complete_keyframes = true;
+  // Gaps between the rendered fill discs (RenderFills) of at most this many pixels are closed
+  // where the discs on either side lie on one surface (depths within fusion.free_space_margin;
+  // CloseSplatGaps): the renderer's discs, seen from a keyframe other than the ones that measured
+  // them, do not tile the image. Pixels; 0 leaves the gaps.
+  int completion_max_gap_px = 4;
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -87,7 +92,8 @@ class FusionStage {
   // report.json's "surfels" for variant `index`.
   nlohmann::ordered_json Report(size_t index = 0) const;
   // After Finish(): the first variant's model seen from world_from_camera (at the final
-  // corrections) where its nearest stable surfel is a fill; CV_32F metres, 0 elsewhere.
+  // corrections) where its nearest stable surfel is a fill, gaps between the fill discs closed
+  // (completion_max_gap_px); CV_32F metres, 0 elsewhere.
   cv::Mat RenderFills(const SE3& world_from_camera);
 
  private:

@@ -76,7 +76,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopStageOptions, database, detector, graph, 
                                    odometry_noise, gap_sigma_m, gap_sigma_deg,
                                    relocalise_candidates, free_keyframes)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionStageOptions, fusion, queue_capacity, count_every,
-                                   fuse_carried, complete_keyframes)
+                                   fuse_carried, complete_keyframes,
+                                   completion_max_gap_px)
 
 namespace {
 

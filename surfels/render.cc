@@ -59,6 +59,49 @@ SurfelImage RenderSurfels(const std::vector<Surfel>& surfels, const Camera& came
   return out;
 }
 
+int CloseSplatGaps(cv::Mat* depth, const cv::Mat& fillable, int max_gap_px,
+                   double max_relative_step) {
+  GF_CHECK(depth && depth->type() == CV_32FC1, "CloseSplatGaps: a CV_32F depth image");
+  GF_CHECK(fillable.empty() || (fillable.type() == CV_8UC1 && fillable.size() == depth->size()),
+           "CloseSplatGaps: fillable is CV_8U of the depth's size");
+  GF_CHECK(max_gap_px >= 0 && max_relative_step >= 0, "CloseSplatGaps: non-negative limits");
+  const cv::Mat drawn = depth->clone();
+  const int rows = drawn.rows, cols = drawn.cols;
+  // The first drawn pixel from (x, y) in steps of (dx, dy), at most max_gap_px + 1 steps away:
+  // its distance in steps (0: none) and depth.
+  auto first_drawn = [&](int x, int y, int dx, int dy, float* z) {
+    for (int step = 1; step <= max_gap_px + 1; ++step) {
+      const int u = x + step * dx, v = y + step * dy;
+      if (u < 0 || v < 0 || u >= cols || v >= rows) return 0;
+      if ((*z = drawn.at<float>(v, u)) > 0) return step;
+    }
+    return 0;
+  };
+  constexpr int kDirections[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
+  int filled = 0;
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < cols; ++x) {
+      if (drawn.at<float>(y, x) > 0 || (!fillable.empty() && !fillable.at<uint8_t>(y, x)))
+        continue;
+      int best_span = max_gap_px + 2;
+      float best = 0;
+      for (const auto& d : kDirections) {
+        float za = 0, zb = 0;
+        const int a = first_drawn(x, y, d[0], d[1], &za);
+        const int b = a ? first_drawn(x, y, -d[0], -d[1], &zb) : 0;
+        if (!b || a + b >= best_span) continue;
+        if (std::abs(za - zb) > max_relative_step * std::min(za, zb)) continue;
+        best_span = a + b;
+        best = (za * b + zb * a) / (a + b);  // linear along the span
+      }
+      if (best > 0) {
+        depth->at<float>(y, x) = best;
+        ++filled;
+      }
+    }
+  return filled;
+}
+
 SE3 ViewOfMap(const std::vector<Surfel>& surfels, const Camera& camera,
               const Eigen::Vector3d& direction, const Eigen::Vector3d& up) {
   GF_CHECK(direction.norm() > 0 && up.cross(direction).norm() > 0,

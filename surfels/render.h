@@ -37,6 +37,18 @@ struct SurfelImage {
 SurfelImage RenderSurfels(const std::vector<Surfel>& surfels, const Camera& camera,
                           const SE3& world_from_camera, const RenderOptions& options);
 
+// Closes the gaps that discs leave between the surfels of one surface in a rendered depth image
+// (neighbouring discs seen from another viewpoint than the one they were measured from do not
+// tile the image). A pixel where `fillable` (CV_8U, non-zero; empty = every pixel) and depth is 0
+// takes the depth interpolated between the two drawn pixels that enclose it along a row, a column
+// or a diagonal, when they are at most max_gap_px + 1 apart (so at most max_gap_px empty pixels
+// lie between them) and their depths differ by at most max_relative_step of the nearer: one
+// surface, not an edge. The shortest such span decides. Nothing extends past a drawn region's
+// border: a pixel must be enclosed on both sides. Pixels filled here do not enclose others.
+// Returns the count filled.
+int CloseSplatGaps(cv::Mat* depth, const cv::Mat& fillable, int max_gap_px,
+                   double max_relative_step);
+
 // A viewpoint that sees the whole map: looking at its centroid from `direction` (world frame, from
 // the camera towards the map), far enough that the map's extent fills about 80% of the image.
 SE3 ViewOfMap(const std::vector<Surfel>& surfels, const Camera& camera,
