@@ -142,7 +142,9 @@ class SurfelFusion {
   // Bytes the map holds (capacity), for the memory figures.
   size_t MemoryBytes() const;
   // The stable surfels' depth seen from world_from_camera (CV_32F metres, 0 = none): discs of their
-  // radius, nearest first; what frame-to-model tracking aligns the next frame to. front_source,
+  // radius, nearest first (sensor discs along their normals, fill discs facing the camera: a
+  // fill's normal is too noisy to orient it); what frame-to-model tracking aligns the next frame
+  // to. front_source,
   // when given, gets each pixel's nearest surfel's source (CV_8U DepthSource, kNone where none).
   cv::Mat RenderDepth(const SE3& world_from_camera, cv::Mat* front_source = nullptr);
   // Moves every surfel with the keyframe it belongs to (Surfel::keyframe): by
