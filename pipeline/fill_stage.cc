@@ -123,7 +123,7 @@ nlohmann::ordered_json FillStage::Report() const {
 nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, int dropped,
                                   int not_filled) {
   using json = nlohmann::ordered_json;
-  long holes = 0, filled = 0, carried = 0, corrected = 0;
+  long holes = 0, filled = 0, carried = 0, corrected = 0, corroborated = 0;
   int paired = 0, rescaled = 0, vertical = 0;
   std::vector<double> errors, ms;
   json list = json::array(), failed = json::array();
@@ -145,6 +145,7 @@ nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, in
     filled += k.filled_pixels;
     carried += k.carried_pixels;
     corrected += k.corrected_pixels;
+    corroborated += k.corroborated_pixels;
     if (!k.partner.empty()) {
       ++paired;
       ms.push_back(k.ms);
@@ -163,6 +164,8 @@ nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, in
                     {"filled_pixels", k.filled_pixels},
                     {"carried_pixels", k.carried_pixels},
                     {"corrected_pixels", k.corrected_pixels},
+                    {"witnesses", k.witnesses},
+                    {"corroborated_pixels", k.corroborated_pixels},
                     {"fill_rate", k.hole_pixels ? double(k.filled_pixels) / k.hole_pixels : 0.0},
                     {"stereo_error_median_m", k.stereo_error_median_m},
                     {"ms", k.ms},
@@ -174,6 +177,7 @@ nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, in
           {"fill_rate", holes ? double(filled) / holes : 0.0},
           {"carried_pixels", carried},
           {"corrected_pixels", corrected},
+          {"corroborated_pixels", corroborated},
           {"stereo_error_median_m", errors.empty() ? json() : json(Median(errors))},
           {"keyframes_filled", static_cast<int>(keyframes.size())},
           {"keyframes_paired", paired},

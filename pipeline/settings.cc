@@ -30,7 +30,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PairSelectionOptions, min_matches, max_evalua
                                    max_baseline_m, min_median_disparity_px, max_near_disparity_px,
                                    max_near_disparity_sweep_px, allow_forward, max_rotation_deg,
                                    window, lookahead, spread_third_view_forward,
-                                   mirror_third_view_sideways, surf, match,
+                                   mirror_third_view_sideways, max_witnesses, surf, match,
                                    refine)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PlaneSweepOptions, window_px, max_planes, max_step_px, min_ncc,
                                    min_uniqueness, min_parallax_px, min_texture, min_window_inside,
@@ -45,7 +45,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ValidationOptions, min_depth_m, max_depth_m, 
                                    min_ring_samples, ring_cell_px, max_ring_error,
                                    ring_scale_correction, max_ring_scale, max_pair_error)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PhotometricOptions, patch_px, hole_patches, min_ncc,
-                                   min_patch_std, max_mean_difference, occlusion_margin)
+                                   min_patch_std, max_mean_difference, occlusion_margin,
+                                   corroboration_depth_step, corroboration_shift_px)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(StereoFillOptions, plane_sweep_forward, plane_sweep_always,
                                    plane_sweep_after_sgbm, sweep_sgbm_rejects, sweep_shadows, sgbm,
                                    plane_sweep, depth_steps, see_through, validation, photometric)
@@ -56,7 +57,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixe
                                    max_depth_gap_m, max_normal_angle_deg, normal_test_min_facing,
                                    max_radius_ratio, confidence_sigma, stable_confidence,
                                    unstable_frames, fill_weight, fill_stable_confidence,
-                                   confirm_fills_across_keyframes,
+                                   confirm_fills_across_keyframes, confirm_corroborated_fills,
                                    fill_unstable_frames, free_space_margin, free_space_penalty,
                                    max_neighbour_step, merge_copies_every, normal_filter_px,
                                    normal_filter_depth_m, normal_baseline_px, max_surfels)

@@ -52,6 +52,9 @@ CarriedFillResult StartFromOwnFill(const RgbdFrame& key1, const StereoFillResult
     r.fill_mask = own->fill_mask.clone();
     r.source = own->source.clone();
     r.confidence = own->confidence.clone();
+    r.corroborated = own->corroborated.empty()
+                         ? cv::Mat::zeros(key1.depth.size(), CV_8UC1)
+                         : own->corroborated.clone();
   } else {
     r.filled_depth = key1.depth.clone();
     r.fill_mask = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
@@ -59,6 +62,7 @@ CarriedFillResult StartFromOwnFill(const RgbdFrame& key1, const StereoFillResult
     r.source.setTo(static_cast<uint8_t>(DepthSource::kSensor), key1.hole_mask == 0);
     r.confidence = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
     r.confidence.setTo(1.f, key1.hole_mask == 0);
+    r.corroborated = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
   }
   r.filled_pixels = cv::countNonZero(r.fill_mask);
   return r;
@@ -158,6 +162,7 @@ CarriedFillResult CarryFills(const RgbdFrame& key1, const SE3& world_from_key1,
     r.fill_mask.at<uint8_t>(q) = 255;
     r.source.at<uint8_t>(q) = static_cast<uint8_t>(DepthSource::kCarried);
     r.confidence.at<float>(q) = static_cast<float>(agreeing) / static_cast<float>(values.size());
+    r.corroborated.at<uint8_t>(q) = 0;
   }
   return r;
 }

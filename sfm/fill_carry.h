@@ -60,6 +60,7 @@ struct CarriedFillResult {
   cv::Mat fill_mask;       // CV_8U: 255 where a hole was filled (own or carried)
   cv::Mat source;          // CV_8U DepthSource: kCarried where the depth came from other keyframes
   cv::Mat confidence;      // CV_32F [0, 1]: carried pixels get the share of candidates that agree
+  cv::Mat corroborated;    // CV_8U: the own fill's DepthFill::corroborated (never a carried pixel)
   int filled_pixels = 0;   // all filled pixels, own and carried
   int carried_pixels = 0;  // holes the own stereo left empty that earlier keyframes filled
   int corrected_pixels = 0;  // own fills replaced by the earlier keyframes' consensus

@@ -146,7 +146,8 @@ bool ValidationOptions::Check(std::string* message) const {
 
 bool PhotometricOptions::Check(std::string* message) const {
   if (patch_px < 3 || patch_px % 2 == 0 || !(min_ncc > -1) || !(min_patch_std >= 0) ||
-      !(max_mean_difference > 0) || !(occlusion_margin >= 0)) {
+      !(max_mean_difference > 0) || !(occlusion_margin >= 0) || !(corroboration_depth_step > 0) ||
+      !(corroboration_shift_px >= 0)) {
     if (message) *message = "photometric check: odd patch >= 3, min_ncc > -1, positive thresholds";
     return false;
   }
@@ -162,6 +163,7 @@ DepthFill SensorOnly(const RgbdFrame& key1) {
   f.source.setTo(static_cast<uint8_t>(DepthSource::kSensor), key1.hole_mask == 0);
   f.confidence = cv::Mat::zeros(key1.depth.size(), CV_32FC1);
   f.confidence.setTo(1.f, key1.hole_mask == 0);
+  f.corroborated = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
   return f;
 }
 
@@ -184,7 +186,8 @@ PhotometricCheck::PhotometricCheck(const RgbdFrame& key1, const ThirdView& third
   key3_from_key1_ = third.key1_from_key3.Inverse();
 }
 
-double PhotometricCheck::Agreement(int x, int y, double depth) const {
+double PhotometricCheck::Agreement(int x, int y, double depth, bool* corroborates) const {
+  if (corroborates) *corroborates = false;
   if (!active()) return 1.0;
   const int r = options_.patch_px / 2;
   const Eigen::Vector2d n = rays_.Ray(x, y);
@@ -223,7 +226,45 @@ double PhotometricCheck::Agreement(int x, int y, double depth) const {
                                                 : 0.0;
   }
   const double ncc = (sab / count - ma * mb) / std::sqrt(va * vb);
-  return ncc >= options_.min_ncc ? ncc : 0.0;
+  if (ncc < options_.min_ncc) return 0.0;
+  if (corroborates) {
+    // How far a corroboration_depth_step change of the depth moves the point in the third view.
+    const double far = depth * (1.0 + options_.corroboration_depth_step);
+    const Eigen::Vector3d p3_far = key3_from_key1_ * Eigen::Vector3d(n.x() * far, n.y() * far, far);
+    *corroborates = p3_far.z() > 0 && (camera_.ProjectDistorted(p3_far) - q).norm() >=
+                                          options_.corroboration_shift_px;
+  }
+  return ncc;
+}
+
+void CorroborateFill(const RgbdFrame& key1, const std::vector<ThirdView>& views,
+                     const Camera& camera, const PhotometricOptions& options,
+                     const cv::Mat& eligible, DepthFill* fill) {
+  if (fill->corroborated.empty()) fill->corroborated = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
+  const float step = static_cast<float>(options.corroboration_depth_step);
+  auto open = [&](int x, int y) {  // filled, eligible and not yet corroborated
+    return fill->fill_mask.at<uint8_t>(y, x) != 0 && fill->corroborated.at<uint8_t>(y, x) == 0 &&
+           (eligible.empty() || eligible.at<uint8_t>(y, x) != 0);
+  };
+  for (const ThirdView& view : views) {
+    if (view.frame == nullptr) continue;
+    const PhotometricCheck check(key1, view, camera, options);
+    if (!check.active()) continue;
+    for (int y = 0; y + 1 < key1.depth.rows; y += 2) {
+      for (int x = 0; x + 1 < key1.depth.cols; x += 2) {
+        if (!open(x, y)) continue;
+        const float z = fill->filled_depth.at<float>(y, x);
+        bool corroborates = false;
+        check.Agreement(x, y, z, &corroborates);
+        if (!corroborates) continue;
+        for (int dy = 0; dy < 2; ++dy)
+          for (int dx = 0; dx < 2; ++dx)
+            if (open(x + dx, y + dy) &&
+                std::abs(fill->filled_depth.at<float>(y + dy, x + dx) - z) <= step * z)
+              fill->corroborated.at<uint8_t>(y + dy, x + dx) = 255;
+      }
+    }
+  }
 }
 
 bool ValidateAndFill(const cv::Mat& candidate, const RgbdFrame& key1, const Holes& holes,

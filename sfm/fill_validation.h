@@ -45,6 +45,13 @@ struct PhotometricOptions {
   double min_patch_std = 4.0;         // below this grey-level spread a patch is textureless ...
   double max_mean_difference = 25.0;  // ... and then only the mean grey levels are compared
   double occlusion_margin = 0.05;     // third view's sensor nearer by this (relative): hidden there
+  // A view that took no part in measuring a fill corroborates it (CorroborateFill) where both
+  // patches are textured and correlate at least min_ncc, and where a change of the depth by
+  // corroboration_depth_step (relative) would move the point in that view by
+  // corroboration_shift_px pixels or more: only there does the correlation test the depth at that
+  // precision. Fusion confirms a corroborated fill without waiting for another keyframe's fill.
+  double corroboration_depth_step = 0.03;
+  double corroboration_shift_px = 1.0;
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -61,6 +68,8 @@ struct DepthFill {
   cv::Mat source;        // CV_8U: DepthSource per pixel of filled_depth
   cv::Mat confidence;    // CV_32F in [0, 1]: 1 on sensor pixels, the fill's confidence on filled
                          // ones (ring agreement times photometric agreement), 0 elsewhere
+  cv::Mat corroborated;  // CV_8U: 255 where a view independent of the fill's pair corroborates
+                         // the filled depth (PhotometricCheck::Agreement), 0 elsewhere
   int hole_pixels = 0;   // pixels the sensor left empty
   int filled_pixels = 0;
   int rejected_by_ring = 0;        // hole pixels with depth whose hole failed the ring test
@@ -90,8 +99,9 @@ class PhotometricCheck {
                    const PhotometricOptions& options);
   bool active() const { return !gray3_.empty(); }
   // 1 when unchecked, the patch correlation (or mean agreement) in (0, 1] when it passes, 0 when
-  // the third view contradicts the depth.
-  double Agreement(int x, int y, double depth) const;
+  // the third view contradicts the depth. *corroborates (when given): whether textured patches
+  // passed where the third view resolves a corroboration_depth_step change of the depth.
+  double Agreement(int x, int y, double depth, bool* corroborates = nullptr) const;
 
  private:
   const Camera& camera_;
@@ -101,6 +111,14 @@ class PhotometricCheck {
   cv::Mat gray1_, gray3_, holes1_;
   SE3 key3_from_key1_;
 };
+
+// Marks fill->corroborated on the filled pixels (those of `eligible` too, when given: CV_8U) that
+// one of `views` corroborates (PhotometricCheck::Agreement). One pixel per 2x2 block is tested; a
+// corroborated one marks the filled pixels of its block within corroboration_depth_step of its
+// depth. Views with a null frame are skipped.
+void CorroborateFill(const RgbdFrame& key1, const std::vector<ThirdView>& views,
+                     const Camera& camera, const PhotometricOptions& options,
+                     const cv::Mat& eligible, DepthFill* fill);
 
 // Validates one candidate depth image (keyframe 1's pixels, 0 = none) against the sensor and fills
 // the hole pixels that pass, are still empty in *fill and, when `fillable` is given (CV_8U),

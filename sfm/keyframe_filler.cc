@@ -81,9 +81,14 @@ FilledKeyframe KeyframeFiller::Fill(const StereoJob& job) {
       ThirdView third;
       if (job.third) third = {&job.third->frame, job.choice.third_pose.key1_from_key2};
       out.partner = job.key2;
+      k.witnesses = static_cast<int>(job.witnesses.size());
+      std::vector<ThirdView> witnesses;
+      const SE3 key1_from_world = job.key1->world_from_camera.Inverse();
+      for (const auto& w : job.witnesses)
+        witnesses.push_back({&w->frame, key1_from_world * w->world_from_camera});
       out.stereo =
           FillHolesByStereo(key1, job.key2->frame, camera_, job.choice.partner_pose.key1_from_key2,
-                            options_.stereo, third);
+                            options_.stereo, third, witnesses);
       const StereoFillResult& r = out.stereo;
       k.partner = KeyframeName(job.key2->frame);
       if (job.third) k.third = KeyframeName(job.third->frame);
@@ -111,6 +116,7 @@ FilledKeyframe KeyframeFiller::Fill(const StereoJob& job) {
   k.filled_pixels = out.fill.filled_pixels;
   k.carried_pixels = out.fill.carried_pixels;
   k.corrected_pixels = out.fill.corrected_pixels;
+  k.corroborated_pixels = out.fill.corroborated.empty() ? 0 : cv::countNonZero(out.fill.corroborated);
   k.ms = out.stereo_ms + out.carry_ms;
   return out;
 }
@@ -131,6 +137,7 @@ FilledKeyframe KeyframeFiller::Failed(std::shared_ptr<const StereoKeyframe> key,
   sensor_only.fill_mask = cv::Mat::zeros(frame.depth.size(), CV_8UC1);
   sensor_only.source = cv::Mat::zeros(frame.depth.size(), CV_8UC1);
   sensor_only.confidence = cv::Mat::zeros(frame.depth.size(), CV_32FC1);
+  sensor_only.corroborated = cv::Mat::zeros(frame.depth.size(), CV_8UC1);
   return out;
 }
 

@@ -54,6 +54,8 @@ struct KeyframeFill {
   int filled_pixels = 0;             // own stereo and carried
   int carried_pixels = 0;            // holes filled from earlier keyframes' fills
   int corrected_pixels = 0;          // own fills the earlier keyframes' consensus replaced
+  int witnesses = 0;                 // views that only witnessed the fill (max_witnesses)
+  int corroborated_pixels = 0;       // own fills a view outside their pair corroborated
   double stereo_error_median_m = 0;  // stereo vs sensor on pixels both have
   double ms = 0;                     // stereo, validation and carry, milliseconds
 };

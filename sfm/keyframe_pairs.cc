@@ -27,6 +27,7 @@ bool PairSelectionOptions::Check(std::string* message) const {
   };
   if (min_matches < 1) return fail("min_matches must be positive");
   if (max_evaluations < 1) return fail("max_evaluations must be positive");
+  if (max_witnesses < 0) return fail("max_witnesses must not be negative");
   if (!geometry.Check(message)) return false;
   if (!(max_baseline_m > geometry.min_baseline_m))
     return fail("need geometry.min_baseline_m < max_baseline_m");
@@ -184,6 +185,11 @@ PairChoice SelectPartner(const StereoKeyframe& key1,
       ScreenCandidates(key1, candidates, camera, options, median_depth, near_depth);
   const int fewest_short =
       ChoosePartnerAndThird(key1, candidates, camera, options, screened.in_range, &choice);
+  for (const CandidateGeometry& g : screened.in_range) {
+    if (static_cast<int>(choice.witnesses.size()) >= options.max_witnesses) break;
+    if (choice.found && g.index != choice.partner && g.index != choice.third)
+      choice.witnesses.push_back(g.index);
+  }
   const SE3 key1_from_world = key1.world_from_camera.Inverse();
   if (options.refine.photometric) {
     if (choice.found)
@@ -236,6 +242,7 @@ StereoJob KeyframePairScheduler::MakeJob(size_t position) const {
   }
   if (job.choice.found) job.key2 = candidates[job.choice.partner];
   if (job.choice.third >= 0) job.third = candidates[job.choice.third];
+  for (int w : job.choice.witnesses) job.witnesses.push_back(candidates[w]);
   return job;
 }
 

@@ -66,6 +66,10 @@ struct PairSelectionOptions {
   // after the partner in order of baseline (false), usually on the partner's side
   // (docs/experiments/2026-12-03-mirrored-third-view.md).
   bool mirror_third_view_sideways = true;
+  // Further keyframes with usable parallax (farthest first), at their tracked poses, that only
+  // witness the fill: where one sees the filled surface as keyframe 1 does, the fill is
+  // corroborated (CorroborateFill). At most this many per keyframe.
+  int max_witnesses = 4;
   SurfOptions surf = [] {
     SurfOptions s;
     s.upright = true;
@@ -81,6 +85,7 @@ struct PairChoice {
   bool found = false;
   int partner = -1;  // index into the candidates
   int third = -1;    // another acceptable candidate, for the photometric check (-1 = none)
+  std::vector<int> witnesses;  // further candidates with usable parallax (max_witnesses)
   int matches = 0;   // RANSAC inlier matches with the partner
   PoseRefinement partner_pose;  // key1_from_partner, refined
   PoseRefinement third_pose;    // key1_from_third, refined
@@ -99,6 +104,7 @@ struct StereoJob {
   std::shared_ptr<const StereoKeyframe> key1;
   std::shared_ptr<const StereoKeyframe> key2;   // null: no partner (choice.reason says why)
   std::shared_ptr<const StereoKeyframe> third;  // may be null
+  std::vector<std::shared_ptr<const StereoKeyframe>> witnesses;  // choice.witnesses
   PairChoice choice;  // choice.partner_pose / third_pose: the refined relative poses
   std::string error;  // non-empty when pair selection threw (choice then holds no partner)
 };

@@ -140,7 +140,8 @@ bool IsForwardPair(const Camera& camera, const SE3& key1_from_key2, double margi
 
 StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
                                    const Camera& camera, const SE3& key1_from_key2,
-                                   const StereoFillOptions& options, const ThirdView& third) {
+                                   const StereoFillOptions& options, const ThirdView& third,
+                                   const std::vector<ThirdView>& witnesses) {
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
   GF_CHECK(key1.color.type() == CV_8UC3 && key2.color.type() == CV_8UC3 &&
@@ -178,9 +179,11 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   }
   bool agrees = false;  // some method agreed with the sensor
   cv::Mat rim;          // the rims of the holes SGBM sees into (empty: none)
+  cv::Mat sgbm_filled;  // the pixels SGBM filled
   if (sgbm) {
     result.method = "rectified SGBM";
     agrees = FillBySgbm(result.rectification, &c, &result, &rim);
+    sgbm_filled = result.fill_mask.clone();
   }
   if (!sgbm || options.plane_sweep_after_sgbm) {
     if (!sgbm) result.method = "plane sweep";
@@ -196,6 +199,9 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
     result.termination = "stereo disagrees with the sensor (pose or matching)";
     return result;
   }
+  if (!sgbm_filled.empty() && cv::countNonZero(sgbm_filled) > 0)
+    CorroborateFill(key1, {third}, camera, options.photometric, sgbm_filled, &result);
+  CorroborateFill(key1, witnesses, camera, options.photometric, cv::Mat(), &result);
   result.success = true;
   result.termination = "ok";
   return result;

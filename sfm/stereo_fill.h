@@ -95,9 +95,13 @@ bool EpipoleInsideImage(const Camera& camera, const SE3& a_from_b, double margin
 bool IsForwardPair(const Camera& camera, const SE3& key1_from_key2, double margin_px);
 
 // key1/key2: colour (BGR) and metric depth with hole masks; key1_from_key2 maps points from
-// keyframe 2's camera into keyframe 1's. Both frames use `camera`.
+// keyframe 2's camera into keyframe 1's. Both frames use `camera`. The fill is corroborated
+// (DepthFill::corroborated, CorroborateFill) by the third view where SGBM measured it (SGBM sees
+// keyframes 1 and 2 alone; the plane sweep uses the third view), and by each of `witnesses`
+// (views that no method uses) wherever it is filled.
 StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
                                    const Camera& camera, const SE3& key1_from_key2,
-                                   const StereoFillOptions& options, const ThirdView& third = {});
+                                   const StereoFillOptions& options, const ThirdView& third = {},
+                                   const std::vector<ThirdView>& witnesses = {});
 
 }  // namespace gf

@@ -90,6 +90,44 @@ RenderedTriple RenderTriple(const std::string& scene_name, uint32_t seed, int i1
           poses[i1].Inverse() * poses[i2], poses[i1].Inverse() * poses[i3]};
 }
 
+// A view that took no part in a fill corroborates it where the fill is right and the view has
+// the parallax to tell: the glossy, dark and textured-glass holes of the synthetic table filled
+// with their true depth are corroborated in part (a quarter: the rest is textureless, hidden or
+// outside the view), the same holes filled 15% too far hardly
+// at all, and a view without parallax (keyframe 1 itself) corroborates nothing.
+TEST(CorroborateFill, AViewWithParallaxCorroboratesRightFillsAndNotWrongOnes) {
+  const RenderedTriple t = RenderTriple("glass-table", 5, 10, 16, 4);
+  const Camera camera = synth::SynthCamera();
+  auto filled_with = [&](double factor) {
+    DepthFill fill = SensorOnly(t.a.frame);
+    for (int y = 0; y < fill.fill_mask.rows; ++y)
+      for (int x = 0; x < fill.fill_mask.cols; ++x) {
+        const int label = t.a.truth.label.at<uint8_t>(y, x);
+        const float truth = t.a.truth.visible_depth.at<float>(y, x);
+        if (t.a.frame.hole_mask.at<uint8_t>(y, x) == 0 || label < 1 || label > 3 || !(truth > 0))
+          continue;
+        fill.fill_mask.at<uint8_t>(y, x) = 255;
+        fill.filled_depth.at<float>(y, x) = static_cast<float>(factor * truth);
+      }
+    return fill;
+  };
+  auto corroborated_share = [&](double factor, const ThirdView& view) {
+    DepthFill fill = filled_with(factor);
+    CorroborateFill(t.a.frame, {view}, camera, PhotometricOptions{}, cv::Mat(), &fill);
+    EXPECT_EQ(cv::countNonZero(fill.corroborated & (fill.fill_mask == 0)), 0);
+    return static_cast<double>(cv::countNonZero(fill.corroborated)) /
+           std::max(1, cv::countNonZero(fill.fill_mask));
+  };
+  const double right = corroborated_share(1.0, t.Third());
+  const double wrong = corroborated_share(1.15, t.Third());
+  const double no_parallax = corroborated_share(1.0, {&t.a.frame, SE3()});
+  std::printf("corroborated: right %.3f, 15%% too far %.3f, without parallax %.3f\n", right, wrong,
+              no_parallax);
+  EXPECT_GT(right, 0.15);
+  EXPECT_LT(wrong, 0.25 * right);
+  EXPECT_EQ(no_parallax, 0.0);
+}
+
 TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   const RenderedTriple t = RenderTriple("glass-table", 5, 10, 16, 4);
   const Rendered &a = t.a, &b = t.b;

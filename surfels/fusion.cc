@@ -230,6 +230,7 @@ void SurfelFusion::MeasureRow(const Measurement& m, const StepConstants& k, int 
       res.red = res.green = res.blue = 0;
     }
     res.source = source;
+    res.corroborated = mask && mask[x] == kCorroboratedFill;
     res.valid = true;
     res.match = NearestAlongRay(k, x, y, ray[x], res);
   }
@@ -368,6 +369,8 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
           fill && s.source != sensor
               ? FillConfidence(s, sum, m.keyframe, in_camera_[res.match].z(), res.point.z())
               : sum;
+      if (fill && s.source != sensor && res.corroborated && options_.confirm_corroborated_fills)
+        s.confidence = std::max(s.confidence, static_cast<float>(options_.fill_stable_confidence));
       s.last_frame = frame_;
       s.keyframe = m.keyframe;
       TouchGeometry(index);
@@ -377,7 +380,9 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
       s.position = p;
       s.normal = n;
       s.radius = res.radius;
-      s.confidence = res.weight;
+      s.confidence = res.corroborated && options_.confirm_corroborated_fills
+                         ? std::max(res.weight, static_cast<float>(options_.fill_stable_confidence))
+                         : res.weight;
       s.first_frame = s.last_frame = frame_;
       s.keyframe = m.keyframe;
       s.red = res.red, s.green = res.green, s.blue = res.blue;

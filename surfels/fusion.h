@@ -54,6 +54,9 @@
 
 namespace gf {
 
+// FuseFill's mask value for a fill pixel that a view independent of its pair corroborates.
+inline constexpr uint8_t kCorroboratedFill = 128;
+
 struct FusionOptions {
   double min_depth_m = 0.3;       // measurements outside [min_depth_m, max_depth_m] are not fused
   double max_depth_m = 4.0;       // (Kinect noise grows with the square of depth)
@@ -78,6 +81,9 @@ struct FusionOptions {
   // only when its summed weights reach fill_stable_confidence, which at the stereo's usual
   // per-pixel confidences takes four or more keyframes.
   bool confirm_fills_across_keyframes = true;
+  // A fill pixel that FuseFill's mask marks kCorroboratedFill (a view independent of the fill's
+  // stereo pair already agrees with it) confirms its surfel at once, as a second keyframe would.
+  bool confirm_corroborated_fills = true;
   int fill_unstable_frames = 90;     // unconfirmed fills older than this many frames go
   double free_space_margin = 0.03;   // relative depth by which the sensor must see past a
                                      // surfel to contradict it
@@ -126,9 +132,10 @@ class SurfelFusion {
 
   // A tracked frame's sensor depth (frame.depth, metres; colour when it has it), one time step.
   FusionStats FuseFrame(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe);
-  // A keyframe's fill: the pixels of `fill_mask` (CV_8U) of `filled_depth` (CV_32F metres: the
-  // sensor's depth plus the fill, for normals across the patch border), each weighted by
-  // `confidence` (CV_32F in [0, 1]) and tagged `source`. Not a time step.
+  // A keyframe's fill: the pixels of `fill_mask` (CV_8U, non-zero; kCorroboratedFill where an
+  // independent view corroborates the pixel) of `filled_depth` (CV_32F metres: the sensor's depth
+  // plus the fill, for normals across the patch border), each weighted by `confidence` (CV_32F
+  // in [0, 1]) and tagged `source`. Not a time step.
   FusionStats FuseFill(const RgbdFrame& frame, const cv::Mat& filled_depth,
                        const cv::Mat& fill_mask, const cv::Mat& confidence, DepthSource source,
                        const SE3& world_from_camera, int keyframe);
@@ -176,6 +183,7 @@ class SurfelFusion {
     float radius = 0, weight = 0;
     uint8_t red = 0, green = 0, blue = 0;
     DepthSource source = DepthSource::kSensor;
+    bool corroborated = false;  // a fill pixel marked kCorroboratedFill
   };
   struct StepConstants;
   // One grid row's normals from RowNormals, per grid column: unit, camera frame, facing the

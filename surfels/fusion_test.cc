@@ -369,6 +369,34 @@ TEST(SurfelFusion, AFillOfAnotherKeyframeThatAgreesConfirmsItWhateverTheWeights)
   EXPECT_GT(stable_after(1, 1.548f, true, 0.04), 100);
 }
 
+// A fill pixel that an independent view corroborated (kCorroboratedFill in the mask) is
+// confirmed by its own keyframe's fill, whatever its weight; unmarked pixels of the same fill,
+// or marked ones with the rule off, are not.
+TEST(SurfelFusion, ACorroboratedFillIsConfirmedWithoutASecondKeyframe) {
+  const Camera camera = SmallCamera();
+  const SE3 pose = At(0, 0, 0);
+  const cv::Mat confidence(camera.height, camera.width, CV_32FC1, cv::Scalar(0.3f));
+  cv::Mat mask = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+  mask(cv::Rect(60, 40, 30, 30)).setTo(255);
+  mask(cv::Rect(60, 40, 15, 30)).setTo(kCorroboratedFill);  // the left half
+  const int stereo = static_cast<int>(DepthSource::kStereo);
+  auto fused = [&](bool rule) {
+    FusionOptions options;
+    options.confirm_corroborated_fills = rule;
+    SurfelFusion fusion(camera, options);
+    const RgbdFrame wall = Wall(camera, pose);
+    fusion.FuseFill(wall, wall.depth, mask, confidence, DepthSource::kStereo, pose, 0);
+    return fusion.Counts();
+  };
+  const SurfelCounts on = fused(true), off = fused(false);
+  // About half of the patch's surfels each way (every second pixel each way is fused).
+  EXPECT_GT(on.stable[stereo], 40);
+  EXPECT_GT(on.unstable[stereo], 40);
+  EXPECT_NEAR(on.stable[stereo], on.unstable[stereo], 0.3 * on.unstable[stereo]);
+  EXPECT_EQ(off.stable[stereo], 0);
+  EXPECT_EQ(off.unstable[stereo], on.stable[stereo] + on.unstable[stereo]);
+}
+
 // The synthetic glass table fused with its true poses (sensor depth only, 40 frames): the stable
 // surfels lie on the scene's surfaces, and cover what the sensor measures of it but not the
 // materials it cannot measure (ScoreMap against the scene's mesh, counting the surfaces the first
