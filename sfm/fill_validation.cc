@@ -242,7 +242,7 @@ void CorroborateFill(const RgbdFrame& key1, const std::vector<ThirdView>& views,
                      const cv::Mat& eligible, DepthFill* fill) {
   if (fill->corroborated.empty()) fill->corroborated = cv::Mat::zeros(key1.depth.size(), CV_8UC1);
   const float step = static_cast<float>(options.corroboration_depth_step);
-  auto open = [&](int x, int y) {  // filled, eligible and not yet corroborated
+  auto pending = [&](int x, int y) {  // filled, eligible and not yet corroborated
     return fill->fill_mask.at<uint8_t>(y, x) != 0 && fill->corroborated.at<uint8_t>(y, x) == 0 &&
            (eligible.empty() || eligible.at<uint8_t>(y, x) != 0);
   };
@@ -252,14 +252,14 @@ void CorroborateFill(const RgbdFrame& key1, const std::vector<ThirdView>& views,
     if (!check.active()) continue;
     for (int y = 0; y + 1 < key1.depth.rows; y += 2) {
       for (int x = 0; x + 1 < key1.depth.cols; x += 2) {
-        if (!open(x, y)) continue;
+        if (!pending(x, y)) continue;
         const float z = fill->filled_depth.at<float>(y, x);
         bool corroborates = false;
         check.Agreement(x, y, z, &corroborates);
         if (!corroborates) continue;
         for (int dy = 0; dy < 2; ++dy)
           for (int dx = 0; dx < 2; ++dx)
-            if (open(x + dx, y + dy) &&
+            if (pending(x + dx, y + dy) &&
                 std::abs(fill->filled_depth.at<float>(y + dy, x + dx) - z) <= step * z)
               fill->corroborated.at<uint8_t>(y + dy, x + dx) = 255;
       }

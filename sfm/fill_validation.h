@@ -7,7 +7,8 @@
 // nearer the shadow's far side than its near one (the shadow is the far surface). Where a third
 // keyframe sees the filled point, its colour there must match keyframe 1's (PhotometricCheck).
 // Measured pixels are never changed. Each filled pixel gets a confidence: ring agreement times
-// photometric agreement.
+// photometric agreement. Views that took no part in measuring a fill may corroborate it
+// (CorroborateFill), which fusion counts as a second keyframe's agreement.
 //
 // No threads, no I/O.
 #pragma once

@@ -12,7 +12,8 @@
 // and a second view for the plane sweep); for a forward pair, the acceptable keyframe farthest
 // from I2, which sees what I2 cannot (spread_third_view_forward); for a sideways pair, the one
 // nearest I2's mirror image through I1, which sees the edge band that I2 cannot
-// (mirror_third_view_sideways).
+// (mirror_third_view_sideways). Up to max_witnesses further acceptable keyframes (by geometry,
+// at their tracked poses) only witness the fill (CorroborateFill).
 //
 // KeyframePairScheduler decides when a keyframe is ready: candidates are the `window` keyframes
 // before it and the `lookahead` keyframes after it, so a keyframe's pair is chosen once
