@@ -102,7 +102,8 @@ void FusionStage::OfferFill(const FilledKeyframe& filled, int keyframe) {
   if (!options_.fuse_carried)
     item.fill_mask &= filled.fill.source == static_cast<uint8_t>(DepthSource::kStereo);
   if (!filled.fill.corroborated.empty())
-    item.fill_mask.setTo(kCorroboratedFill, (item.fill_mask != 0) & (filled.fill.corroborated != 0));
+    item.fill_mask.setTo(kCorroboratedFill,
+                         (item.fill_mask != 0) & (filled.fill.corroborated != 0));
   Offer(std::move(item));
 }
 

@@ -116,7 +116,8 @@ FilledKeyframe KeyframeFiller::Fill(const StereoJob& job) {
   k.filled_pixels = out.fill.filled_pixels;
   k.carried_pixels = out.fill.carried_pixels;
   k.corrected_pixels = out.fill.corrected_pixels;
-  k.corroborated_pixels = out.fill.corroborated.empty() ? 0 : cv::countNonZero(out.fill.corroborated);
+  k.corroborated_pixels =
+      out.fill.corroborated.empty() ? 0 : cv::countNonZero(out.fill.corroborated);
   k.ms = out.stereo_ms + out.carry_ms;
   return out;
 }

@@ -93,8 +93,8 @@ RenderedTriple RenderTriple(const std::string& scene_name, uint32_t seed, int i1
 // A view that took no part in a fill corroborates it where the fill is right and the view has
 // the parallax to tell: the glossy, dark and textured-glass holes of the synthetic table filled
 // with their true depth are corroborated in part (a quarter: the rest is textureless, hidden or
-// outside the view), the same holes filled 15% too far hardly
-// at all, and a view without parallax (keyframe 1 itself) corroborates nothing.
+// outside the view), the same holes filled 15% too far hardly at all, and a view without
+// parallax (keyframe 1 itself) corroborates nothing.
 TEST(CorroborateFill, AViewWithParallaxCorroboratesRightFillsAndNotWrongOnes) {
   const RenderedTriple t = RenderTriple("glass-table", 5, 10, 16, 4);
   const Camera camera = synth::SynthCamera();

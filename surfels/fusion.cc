@@ -367,10 +367,10 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
       }
       s.confidence =
           fill && s.source != sensor
-              ? FillConfidence(s, sum, m.keyframe, in_camera_[res.match].z(), res.point.z())
+              ? WithCorroboration(
+                    FillConfidence(s, sum, m.keyframe, in_camera_[res.match].z(), res.point.z()),
+                    res.corroborated)
               : sum;
-      if (fill && s.source != sensor && res.corroborated && options_.confirm_corroborated_fills)
-        s.confidence = std::max(s.confidence, static_cast<float>(options_.fill_stable_confidence));
       s.last_frame = frame_;
       s.keyframe = m.keyframe;
       TouchGeometry(index);
@@ -380,9 +380,7 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
       s.position = p;
       s.normal = n;
       s.radius = res.radius;
-      s.confidence = res.corroborated && options_.confirm_corroborated_fills
-                         ? std::max(res.weight, static_cast<float>(options_.fill_stable_confidence))
-                         : res.weight;
+      s.confidence = WithCorroboration(res.weight, res.corroborated);
       s.first_frame = s.last_frame = frame_;
       s.keyframe = m.keyframe;
       s.red = res.red, s.green = res.green, s.blue = res.blue;
@@ -401,6 +399,12 @@ float SurfelFusion::FillConfidence(const Surfel& s, float confidence, int other_
       !(std::abs(z - other_z) <= options_.free_space_margin * std::max(z, other_z)))
     return confidence;
   return std::max(confidence, static_cast<float>(options_.fill_stable_confidence));
+}
+
+float SurfelFusion::WithCorroboration(float confidence, bool corroborated) const {
+  return corroborated && options_.confirm_corroborated_fills
+             ? std::max(confidence, static_cast<float>(options_.fill_stable_confidence))
+             : confidence;
 }
 
 bool SurfelFusion::IsStable(const Surfel& s) const {

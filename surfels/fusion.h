@@ -214,6 +214,9 @@ class SurfelFusion {
   // fill_stable_confidence when the two are of different keyframes and agree in depth.
   float FillConfidence(const Surfel& s, float confidence, int other_keyframe, float z,
                        float other_z) const;
+  // `confidence`, raised to fill_stable_confidence for a corroborated fill pixel
+  // (confirm_corroborated_fills).
+  float WithCorroboration(float confidence, bool corroborated) const;
   // The entries of this step (the surfels of the chunks in view) and the index map: culling, then
   // ProjectEntries (each entry's position in the camera and its pixel), then NearestPerPixel (the
   // nearest entry per pixel and its front data).
