@@ -23,7 +23,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(TrackerOptions, pyramid_levels, icp, use_feat
                                    max_jump_m, max_jump_deg, relocalise_frames,
                                    simulated_drift_deg_per_m)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PoseRefinementOptions, reprojection_px, min_inliers,
-                                   max_change_m, max_change_deg, photometric)
+                                   max_change_m, max_change_deg, photometric,
+                                   photometric_iterations)
 // The pair geometry appears once, at fill.geometry (FillStageOptions::Filler copies it).
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PairGeometryOptions, min_baseline_m, epipole_margin_px)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PairSelectionOptions, min_matches, max_evaluations,

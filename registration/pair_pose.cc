@@ -24,7 +24,7 @@ Eigen::Vector3d NormalizedRay(const Camera& camera, const cv::Point2f& pixel) {
 // key1_from_key2 by OpenCV's dense photometric RGB-D odometry, started from `initial`. The images
 // and depth are undistorted first (the odometry assumes a pinhole camera).
 bool PhotometricRefine(const RgbdFrame& key1, const RgbdFrame& key2, const Camera& camera,
-                       const SE3& initial, SE3* refined) {
+                       const std::vector<int>& iterations, const SE3& initial, SE3* refined) {
   cv::Mat map_x, map_y;
   camera.UndistortionMaps(&map_x, &map_y);
   auto prepare = [&](const RgbdFrame& f, cv::Mat* gray, cv::Mat* depth) {
@@ -37,8 +37,11 @@ bool PhotometricRefine(const RgbdFrame& key1, const RgbdFrame& key2, const Camer
   prepare(key1, &gray1, &depth1);
   prepare(key2, &gray2, &depth2);
   camera.CvK().convertTo(k, CV_32F);
+  // Depth 0.3-5 m, depth difference 7 cm at most between matched points, half the textured pixels.
+  // OpenCV replaces the iteration counts by its defaults unless gradient magnitudes come with
+  // them (one per level; 10 is OpenCV's default).
   cv::Ptr<cv::rgbd::RgbdOdometry> odometry = cv::rgbd::RgbdOdometry::create(
-      k, 0.3f, 5.f, 0.07f, std::vector<int>{10, 10, 10, 10}, std::vector<float>(), 0.5f);
+      k, 0.3f, 5.f, 0.07f, iterations, std::vector<float>(iterations.size(), 10.f), 0.5f);
   cv::Mat init, rt;
   cv::eigen2cv(initial.Matrix(), init);
   // compute() returns dst_from_src for (src = key2, dst = key1).
@@ -57,7 +60,8 @@ void AddPhotometricStep(const StereoKeyframe& key1, const StereoKeyframe& key2,
                         const PoseRefinementOptions& options, PoseRefinement* r) {
   if (!r->success) return;
   SE3 photometric;
-  if (!PhotometricRefine(key1.frame, key2.frame, camera, r->key1_from_key2, &photometric)) return;
+  if (!PhotometricRefine(key1.frame, key2.frame, camera, options.photometric_iterations,
+                         r->key1_from_key2, &photometric)) return;
   const SE3 step = r->key1_from_key2.Inverse() * photometric;
   if (step.TranslationNorm() > options.max_change_m ||
       step.RotationAngle() * kDegPerRad > options.max_change_deg)
@@ -72,6 +76,11 @@ void AddPhotometricStep(const StereoKeyframe& key1, const StereoKeyframe& key2,
 bool PoseRefinementOptions::Check(std::string* message) const {
   if (!(reprojection_px > 0) || min_inliers < 6 || !(max_change_m > 0) || !(max_change_deg > 0)) {
     if (message) *message = "pose refinement: positive thresholds, min_inliers >= 6";
+    return false;
+  }
+  if (photometric_iterations.empty() || photometric_iterations.size() > 6 ||
+      *std::min_element(photometric_iterations.begin(), photometric_iterations.end()) < 0) {
+    if (message) *message = "pose refinement: 1 to 6 pyramid levels of photometric iterations >= 0";
     return false;
   }
   return true;

@@ -40,6 +40,9 @@ struct PoseRefinementOptions {
   double max_change_m = 0.05;    // larger change of the tracked pose: rejected, metres
   double max_change_deg = 5.0;   // ... degrees
   bool photometric = true;       // then dense photometric alignment
+  // Its Gauss-Newton iterations per image-pyramid level, the full-size image first (each level
+  // halves the size). OpenCV's own default; the full-size level costs about three quarters.
+  std::vector<int> photometric_iterations = {7, 7, 7, 10};
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -62,6 +62,32 @@ TEST_F(KeyframePairs, RefinesAPerturbedPairPose) {
   EXPECT_GE(r.inliers, options.refine.min_inliers);
 }
 
+// The photometric step runs the iterations it is given (OpenCV replaces iteration counts that come
+// without gradient thresholds by its own): none at all leaves the feature pose as it is; the
+// default iterations move it and keep it near the truth.
+TEST_F(KeyframePairs, PhotometricStepRunsTheIterationsItIsGiven) {
+  const Camera camera = synth::SynthCamera();
+  PairSelectionOptions options;
+  const auto a = MakeStereoKeyframe(0, Frame(10), poses_[10], camera, options.surf);
+  const auto b = MakeStereoKeyframe(1, Frame(16), poses_[16], camera, options.surf);
+  const SE3 truth = poses_[10].Inverse() * poses_[16];
+  options.refine.photometric = false;
+  const PoseRefinement features = RefinePairPose(*a, *b, camera, truth, options.match,
+                                                 options.refine);
+  ASSERT_TRUE(features.success) << features.BriefReport();
+  options.refine.photometric_iterations = {0, 0, 0, 0};
+  PoseRefinement none = features;
+  AddPhotometricStep(*a, *b, camera, truth, options.refine, &none);
+  EXPECT_LT((features.key1_from_key2.Inverse() * none.key1_from_key2).TranslationNorm(), 1e-9);
+  options.refine.photometric_iterations = PoseRefinementOptions().photometric_iterations;
+  PoseRefinement dense = features;
+  AddPhotometricStep(*a, *b, camera, truth, options.refine, &dense);
+  EXPECT_GT((features.key1_from_key2.Inverse() * dense.key1_from_key2).TranslationNorm(), 1e-6);
+  EXPECT_LT((truth.Inverse() * dense.key1_from_key2).TranslationNorm(), 0.004);
+  options.refine.photometric_iterations = {};
+  EXPECT_FALSE(options.Check());
+}
+
 // Keyframes every third frame: each keyframe gets the farthest partner that still matches, with
 // the parallax limits respected, and the jobs come out in order once `lookahead` later keyframes
 // have arrived (the rest at Flush()).
