@@ -37,7 +37,8 @@ bool PhotometricRefine(const RgbdFrame& key1, const RgbdFrame& key2, const Camer
   prepare(key1, &gray1, &depth1);
   prepare(key2, &gray2, &depth2);
   camera.CvK().convertTo(k, CV_32F);
-  // Depth 0.3-5 m, depth difference 7 cm at most between matched points, half the textured pixels.
+  // Depth 0.3-5 m, matched points at most 7 cm apart in depth, at most half the image's pixels (the
+  // most textured).
   // OpenCV replaces the iteration counts by its defaults unless gradient magnitudes come with
   // them (one per level; 10 is OpenCV's default).
   cv::Ptr<cv::rgbd::RgbdOdometry> odometry = cv::rgbd::RgbdOdometry::create(
