@@ -31,8 +31,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PairSelectionOptions, min_matches, max_evalua
                                    max_baseline_m, min_median_disparity_px, max_near_disparity_px,
                                    max_near_disparity_sweep_px, allow_forward, max_rotation_deg,
                                    window, lookahead, spread_third_view_forward,
-                                   mirror_third_view_sideways, max_witnesses, surf, match,
-                                   refine)
+                                   mirror_third_view_sideways, max_witnesses, surf, match, refine)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PlaneSweepOptions, window_px, max_planes, max_step_px, min_ncc,
                                    min_uniqueness, min_parallax_px, min_texture, min_window_inside,
                                    smooth_small, smooth_large, downscale, textureless_cost,
@@ -44,7 +43,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(DepthStepOptions, jump, far_side_px, near_sid
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SeeThroughOptions, ratio, rim_px, near_side_px)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ValidationOptions, min_depth_m, max_depth_m, ring_px,
                                    min_ring_samples, ring_cell_px, max_ring_error,
-                                   ring_scale_correction, max_ring_scale, max_pair_error)
+                                   ring_scale_correction, max_ring_scale, max_pair_error,
+                                   free_space_check, free_space_margin)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PhotometricOptions, patch_px, hole_patches, min_ncc,
                                    min_patch_std, max_mean_difference, occlusion_margin,
                                    corroboration_depth_step, corroboration_shift_px)
@@ -55,13 +55,14 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing
                                    correct_own_fills)
 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixel_step,
-                                   max_depth_gap_m, max_normal_angle_deg, normal_test_min_facing,
-                                   max_radius_ratio, confidence_sigma, stable_confidence,
-                                   unstable_frames, fill_weight, fill_stable_confidence,
-                                   confirm_fills_across_keyframes, confirm_corroborated_fills,
-                                   fill_unstable_frames, free_space_margin, free_space_penalty,
-                                   max_neighbour_step, merge_copies_every, normal_filter_px,
-                                   normal_filter_depth_m, normal_baseline_px, max_surfels)
+                                   fill_pixel_step, max_depth_gap_m, max_normal_angle_deg,
+                                   normal_test_min_facing, max_radius_ratio, confidence_sigma,
+                                   stable_confidence, unstable_frames, fill_weight,
+                                   fill_stable_confidence, confirm_fills_across_keyframes,
+                                   confirm_corroborated_fills, fill_unstable_frames,
+                                   free_space_margin, free_space_penalty, max_neighbour_step,
+                                   merge_copies_every, normal_filter_px, normal_filter_depth_m,
+                                   normal_baseline_px, max_surfels)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(KeyframeDatabaseOptions, words, vocabulary_keyframes,
                                    kmeans_iterations)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(AlignmentNoise, floor_m, floor_deg, bias)
@@ -78,8 +79,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopStageOptions, database, detector, graph, 
                                    odometry_noise, gap_sigma_m, gap_sigma_deg,
                                    relocalise_candidates, free_keyframes)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionStageOptions, fusion, queue_capacity, count_every,
-                                   fuse_carried, complete_keyframes,
-                                   completion_max_gap_px)
+                                   fuse_carried, complete_keyframes, completion_max_gap_px)
 
 namespace {
 

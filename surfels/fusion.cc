@@ -24,12 +24,12 @@ bool FusionOptions::Check(std::string* message) const {
   };
   if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m))
     return fail("fusion: need 0 < min_depth_m < max_depth_m");
-  if (pixel_step < 1 || !(max_depth_gap_m > 0) || !(max_normal_angle_deg > 0) ||
-      !(max_normal_angle_deg <= 90) || !(max_radius_ratio > 0) || !(confidence_sigma > 0) ||
-      !(normal_test_min_facing >= 0 && normal_test_min_facing <= 1))
+  if (pixel_step < 1 || fill_pixel_step < 1 || !(max_depth_gap_m > 0) ||
+      !(max_normal_angle_deg > 0) || !(max_normal_angle_deg <= 90) || !(max_radius_ratio > 0) ||
+      !(confidence_sigma > 0) || !(normal_test_min_facing >= 0 && normal_test_min_facing <= 1))
     return fail(
-        "fusion: pixel_step >= 1, positive gap, angle in (0, 90], positive ratio, sigma, "
-        "normal_test_min_facing in [0, 1]");
+        "fusion: pixel_step and fill_pixel_step >= 1, positive gap, angle in (0, 90], positive "
+        "ratio, sigma, normal_test_min_facing in [0, 1]");
   if (!(stable_confidence > 0) || unstable_frames < 1 || !(fill_weight > 0) ||
       !(fill_stable_confidence > 0) || fill_unstable_frames < 1)
     return fail("fusion: positive stable confidences, windows and fill weight");
@@ -106,7 +106,7 @@ FusionStats SurfelFusion::FuseFrame(const RgbdFrame& frame, const SE3& world_fro
   ++frame_;
   const cv::Mat none;
   return Fuse({frame.depth, none, none, 1.0, DepthSource::kSensor, frame.color, world_from_camera,
-               keyframe, true, frame_ % options_.pixel_step});
+               keyframe, true, options_.pixel_step, frame_ % options_.pixel_step});
 }
 
 FusionStats SurfelFusion::FuseFill(const RgbdFrame& frame, const cv::Mat& filled_depth,
@@ -120,7 +120,8 @@ FusionStats SurfelFusion::FuseFill(const RgbdFrame& frame, const cv::Mat& filled
       "fusion: a fill needs CV_32F depth and confidence and a CV_8U mask of the camera's size");
   ++fills_;
   return Fuse({filled_depth, fill_mask, confidence, options_.fill_weight, source, frame.color,
-               world_from_camera, keyframe, false, fills_ % options_.pixel_step});
+               world_from_camera, keyframe, false, options_.fill_pixel_step,
+               fills_ % options_.fill_pixel_step});
 }
 
 // What stays the same over one measurement's pixels.
@@ -134,7 +135,7 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
   const auto start = std::chrono::steady_clock::now();
   FusionStats stats;
   ProjectMap(m.world_from_camera.Inverse());
-  const int width = camera_.width, height = camera_.height, step = options_.pixel_step;
+  const int width = camera_.width, height = camera_.height, step = m.step;
   StepConstants k;
   k.cos_max = static_cast<float>(std::cos(options_.max_normal_angle_deg * kDegToRad));
   k.focal = static_cast<float>(0.5 * (camera_.fx + camera_.fy));
@@ -173,7 +174,7 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
 
 void SurfelFusion::MeasureRow(const Measurement& m, const StepConstants& k, int y, PixelResult* row,
                               GridRow* grid) const {
-  const int width = camera_.width, height = camera_.height, step = options_.pixel_step;
+  const int width = camera_.width, height = camera_.height, step = m.step;
   const int grid_cols = (width - m.grid_offset + step - 1) / step;
   for (int gx = 0; gx < grid_cols; ++gx) {
     row[gx].valid = false;  // a valid pixel's other fields are all set below
@@ -200,7 +201,7 @@ void SurfelFusion::MeasureRow(const Measurement& m, const StepConstants& k, int 
   const int end =
       last_x < m.grid_offset ? 0 : std::min(grid_cols, (last_x - m.grid_offset) / step + 1);
   if (first >= end) return;
-  RowNormals(*k.smooth_half, m.grid_offset, y, first, end, grid);
+  RowNormals(*k.smooth_half, step, m.grid_offset, y, first, end, grid);
   for (int gx = first; gx < end; ++gx) {
     const int x = m.grid_offset + gx * step;
     if (mask && !mask[x]) continue;
@@ -270,12 +271,12 @@ __attribute__((noinline)) void GridNormalsLoop(
 
 }  // namespace
 
-void SurfelFusion::RowNormals(const cv::Mat& smooth, int grid_offset, int y, int first, int end,
-                              GridRow* grid) const {
+void SurfelFusion::RowNormals(const cv::Mat& smooth, int step, int grid_offset, int y, int first,
+                              int end, GridRow* grid) const {
   // Pixel x's normal: from the vertices normal_baseline_px (b) either side, at the smoothed
   // half-size depth of cells (x +- b) / 2 and (y +- b) / 2, each on the ray of the pixel that
   // cell's depth came from (half_ray_x_, half_ray_y_).
-  const int step = options_.pixel_step, b = options_.normal_baseline_px, h = b / 2;
+  const int b = options_.normal_baseline_px, h = b / 2;
   const int last_row = smooth.rows - 1, last_col = smooth.cols - 1;
   const int j = std::min(y / 2, last_row), up = std::min((y - b) / 2, last_row),
             down = std::min((y + b) / 2, last_row);

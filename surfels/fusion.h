@@ -4,10 +4,11 @@
 // Per measurement (a frame, or a keyframe's filled pixels):
 //  1. the map's surfels are projected into the camera at the measurement's pose, the nearest per
 //     pixel kept (the projected index map);
-//  2. each measured pixel (every pixel_step-th each way, the offset alternating between frames)
-//     with a vertex and normal looks for a surfel in the 3x3 index-map pixels around it: within
-//     max_depth_gap_m along its ray, normals within max_normal_angle_deg (where the surfel faces
-//     the camera: normal_test_min_facing); the one nearest the ray wins;
+//  2. each measured pixel (every pixel_step-th each way, the offset alternating between frames;
+//     a fill's every fill_pixel_step-th) with a vertex and normal looks for a surfel in the 3x3
+//     index-map pixels around it: within max_depth_gap_m along its ray, normals within
+//     max_normal_angle_deg (where the surfel faces the camera: normal_test_min_facing); the one
+//     nearest the ray wins;
 //  3. a match is merged by confidence-weighted averaging of position, normal, colour and radius
 //     when the measurement's radius is under max_radius_ratio times the surfel's (a closer, finer
 //     view), else only its confidence and time are updated; a pixel without a match starts a new,
@@ -58,10 +59,14 @@ namespace gf {
 inline constexpr uint8_t kCorroboratedFill = 128;
 
 struct FusionOptions {
-  double min_depth_m = 0.3;       // measurements outside [min_depth_m, max_depth_m] are not fused
-  double max_depth_m = 4.0;       // (Kinect noise grows with the square of depth)
-  int pixel_step = 2;             // fuse every pixel_step-th pixel each way (1: every pixel)
-  double max_depth_gap_m = 0.05;  // association: surfel within this along the ray, metres
+  double min_depth_m = 0.3;  // measurements outside [min_depth_m, max_depth_m] are not fused
+  double max_depth_m = 4.0;  // (Kinect noise grows with the square of depth)
+  int pixel_step = 2;        // fuse every pixel_step-th pixel each way (1: every pixel)
+  // The same for a keyframe's fill. A sensor frame's grid moves on from frame to frame, so that
+  // over pixel_step^2 frames every pixel is fused; a fill is fused once, and a coarser grid would
+  // leave the rest of its pixels out of the model for good.
+  int fill_pixel_step = 1;
+  double max_depth_gap_m = 0.05;       // association: surfel within this along the ray, metres
   double max_normal_angle_deg = 30.0;  // ... and normals within this, degrees, for surfels
   // facing the camera: |n_z| of the surfel's normal in the camera at least this. More oblique
   // surfaces have measured normals too noisy to compare (the depth step across the normal's
@@ -172,8 +177,9 @@ class SurfelFusion {
     const cv::Mat& color;  // CV_8UC3 BGR (may be empty)
     SE3 world_from_camera;
     int keyframe;
-    bool time_step;  // a sensor frame: cleanup follows
-    int grid_offset;
+    bool time_step;   // a sensor frame: cleanup follows
+    int step;         // every step-th pixel each way ...
+    int grid_offset;  // ... from this one
   };
   // One measured pixel after association.
   struct PixelResult {
@@ -196,13 +202,13 @@ class SurfelFusion {
     std::vector<float> nx, ny, nz, has_normal;
   };
   FusionStats Fuse(const Measurement& m);
-  // The measured pixels of image row y (every pixel_step-th from grid_offset): each one's vertex,
+  // The measured pixels of image row y (every m.step-th from grid_offset): each one's vertex,
   // normal, radius, weight, colour and the surfel it associates with (valid false: not measurable).
   // grid: scratch for the row's normals.
   void MeasureRow(const Measurement& m, const StepConstants& k, int y, PixelResult* row,
                   GridRow* grid) const;
   // The normals of grid columns [first, end) of image row y, from the smoothed half-size depth.
-  void RowNormals(const cv::Mat& smooth, int grid_offset, int y, int first, int end,
+  void RowNormals(const cv::Mat& smooth, int step, int grid_offset, int y, int first, int end,
                   GridRow* grid) const;
   // The entry (index into visible_) of the surfel the measured pixel at (x, y) associates with,
   // -1 none; `ray` is the pixel's (x/z, y/z).

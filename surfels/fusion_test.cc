@@ -336,6 +336,37 @@ TEST(SurfelFusion, AFillNeedsASecondKeyframeToBecomeStable) {
   for (int i = 0; i < 100; ++i) fusion.FuseFrame(nothing, pose, 1);
   EXPECT_GT(fusion.Counts().stable[static_cast<int>(DepthSource::kStereo)], 100);
 }
+
+// A fill is fused once, so each of its pixels starts a surfel (fill_pixel_step 1), where a sensor
+// frame's grid takes one pixel in pixel_step^2 (its offset moves on with the next frame).
+TEST(SurfelFusion, AFillKeepsEveryPixelWhereAFrameIsSampled) {
+  const Camera camera = SmallCamera();
+  const SE3 pose = At(0, 0, 0);
+  const RgbdFrame wall = Wall(camera, pose);
+  cv::Mat mask = cv::Mat::zeros(wall.depth.size(), CV_8UC1);
+  mask(cv::Rect(60, 40, 30, 30)).setTo(255);
+  const cv::Mat confidence(wall.depth.size(), CV_32FC1, cv::Scalar(1.f));
+  const int pixels = cv::countNonZero(mask);
+  for (int fill_step : {1, 2}) {
+    FusionOptions options;
+    options.fill_pixel_step = fill_step;
+    SurfelFusion fusion(camera, options);
+    const FusionStats s =
+        fusion.FuseFill(wall, wall.depth, mask, confidence, DepthSource::kStereo, pose, 0);
+    EXPECT_EQ(s.created, pixels / (fill_step * fill_step)) << "fill_pixel_step " << fill_step;
+  }
+  SurfelFusion fusion(camera, {});
+  RgbdFrame patch = wall;
+  patch.depth.setTo(0.f, mask == 0);
+  // pixel_step 2; the patch's rim has no surfels (a normal needs four measured neighbours).
+  const int frame_created = fusion.FuseFrame(patch, pose, 0).created;
+  EXPECT_LE(frame_created, pixels / 4);
+  EXPECT_GT(frame_created, pixels / 5);
+  FusionOptions zero;
+  zero.fill_pixel_step = 0;
+  EXPECT_FALSE(zero.Check());
+}
+
 // Stereo confidences are often well under 1, so two fills' summed weights stay short of
 // fill_stable_confidence; what confirms a fill is a second keyframe's fill agreeing in depth
 // (within free_space_margin), not the same keyframe's fill again nor one that lies off the surface.
