@@ -139,8 +139,8 @@ bool ValidationOptions::Check(std::string* message) const {
   if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m))
     return fail("need 0 < min_depth_m < max_depth_m");
   if (ring_px < 1 || min_ring_samples < 1 || ring_cell_px < 0 || !(max_ring_error > 0) ||
-      !(max_ring_scale >= 0) || !(max_pair_error > 0))
-    return fail("ring and error thresholds must be positive");
+      !(max_ring_scale >= 0) || !(max_pair_error > 0) || !(free_space_margin > 0))
+    return fail("ring, error and free-space thresholds must be positive");
   return true;
 }
 
@@ -262,6 +262,68 @@ void CorroborateFill(const RgbdFrame& key1, const std::vector<ThirdView>& views,
             if (pending(x + dx, y + dy) &&
                 std::abs(fill->filled_depth.at<float>(y + dy, x + dx) - z) <= step * z)
               fill->corroborated.at<uint8_t>(y + dy, x + dx) = 255;
+      }
+    }
+  }
+}
+
+namespace {
+
+// Whether `view`'s sensor sees through the point p (view's camera frame): all of the 3x3 pixels
+// around its projection measured and farther than it by `margin` (relative).
+bool SeesThrough(const cv::Mat& view_depth, const Camera& camera, const Eigen::Vector3d& p,
+                 double margin) {
+  if (p.z() <= 0) return false;
+  const Eigen::Vector2d q = camera.ProjectDistorted(p);
+  const int qx = static_cast<int>(std::lround(q.x())), qy = static_cast<int>(std::lround(q.y()));
+  if (qx < 1 || qy < 1 || qx + 1 >= view_depth.cols || qy + 1 >= view_depth.rows) return false;
+  const float beyond = static_cast<float>(p.z() * (1.0 + margin));
+  for (int dy = -1; dy <= 1; ++dy) {
+    const float* row = view_depth.ptr<float>(qy + dy);
+    for (int dx = -1; dx <= 1; ++dx)
+      if (!(row[qx + dx] > beyond)) return false;  // unmeasured (0) or not beyond
+  }
+  return true;
+}
+
+}  // namespace
+
+void RemoveSeenThrough(const RgbdFrame& key1, const std::vector<ThirdView>& views,
+                       const Camera& camera, double free_space_margin, DepthFill* fill) {
+  const UndistortedPixels rays(camera);
+  const float margin = static_cast<float>(free_space_margin);
+  auto drop = [&](int x, int y) {
+    fill->fill_mask.at<uint8_t>(y, x) = 0;
+    fill->filled_depth.at<float>(y, x) = 0.f;
+    fill->source.at<uint8_t>(y, x) = static_cast<uint8_t>(DepthSource::kNone);
+    fill->confidence.at<float>(y, x) = 0.f;
+    --fill->filled_pixels;
+    ++fill->rejected_by_free_space;
+  };
+  for (const ThirdView& view : views) {
+    if (view.frame == nullptr || view.frame->depth.type() != CV_32FC1) continue;
+    const SE3 view_from_key1 = view.key1_from_key3.Inverse();
+    // One filled pixel per 2x2 block is tested (as CorroborateFill does); a seen-through one
+    // drops the block's filled pixels within the margin of its depth.
+    for (int y = 0; y + 1 < key1.depth.rows; y += 2) {
+      for (int x = 0; x + 1 < key1.depth.cols; x += 2) {
+        int tx = -1, ty = -1;
+        for (int i = 0; i < 4 && tx < 0; ++i)
+          if (fill->fill_mask.at<uint8_t>(y + i / 2, x + i % 2) != 0)
+            tx = x + i % 2, ty = y + i / 2;
+        if (tx < 0) continue;
+        const float z = fill->filled_depth.at<float>(ty, tx);
+        const Eigen::Vector2d n = rays.Ray(tx, ty);
+        if (!SeesThrough(view.frame->depth, camera,
+                         view_from_key1 * Eigen::Vector3d(n.x() * z, n.y() * z, z),
+                         free_space_margin))
+          continue;
+        for (int i = 0; i < 4; ++i) {
+          const int bx = x + i % 2, by = y + i / 2;
+          if (fill->fill_mask.at<uint8_t>(by, bx) != 0 &&
+              std::abs(fill->filled_depth.at<float>(by, bx) - z) <= margin * z)
+            drop(bx, by);
+        }
       }
     }
   }

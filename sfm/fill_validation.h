@@ -34,6 +34,13 @@ struct ValidationOptions {
   bool ring_scale_correction = true;  // scale each hole's depth by its ring's sensor/stereo ratio
   double max_ring_scale = 0.10;       // ... when that ratio is within 1 +- this
   double max_pair_error = 0.08;  // median relative error over the whole image, else nothing fills
+  // A filled point that another keyframe's sensor sees through (RemoveSeenThrough: all of the 3x3
+  // measured pixels around its projection farther than it by free_space_margin, relative) lies
+  // in space that keyframe saw empty, and is dropped. The margin is fusion's free_space_margin:
+  // the map applies the same rule to its surfels, but only with the sensor frames that come after
+  // a fill reaches it.
+  bool free_space_check = true;
+  double free_space_margin = 0.03;
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -76,6 +83,7 @@ struct DepthFill {
   int rejected_by_ring = 0;        // hole pixels with depth whose hole failed the ring test
   int rejected_by_photometry = 0;  // ... that the third view contradicted
   int rejected_by_shadow = 0;      // ... in projector shadows, nearer the shadow's near side
+  int rejected_by_free_space = 0;  // filled pixels another keyframe's sensor saw through
 };
 // The keyframe's sensor depth, nothing filled yet.
 DepthFill SensorOnly(const RgbdFrame& key1);
@@ -120,6 +128,15 @@ class PhotometricCheck {
 void CorroborateFill(const RgbdFrame& key1, const std::vector<ThirdView>& views,
                      const Camera& camera, const PhotometricOptions& options,
                      const cv::Mat& eligible, DepthFill* fill);
+
+// Drops, in place, the filled pixels of *fill that one of `views` sees through: its sensor
+// depth on all of the 3x3 pixels around the filled point's projection is farther than the point
+// by more than free_space_margin (relative). One filled pixel per 2x2 block is tested; a
+// seen-through one drops the block's filled pixels within free_space_margin of its depth. Counts
+// them in rejected_by_free_space. Points outside a view, behind it, or where it measures less
+// are not judged by it; null frames are skipped.
+void RemoveSeenThrough(const RgbdFrame& key1, const std::vector<ThirdView>& views,
+                       const Camera& camera, double free_space_margin, DepthFill* fill);
 
 // Validates one candidate depth image (keyframe 1's pixels, 0 = none) against the sensor and fills
 // the hole pixels that pass, are still empty in *fill and, when `fillable` is given (CV_8U),

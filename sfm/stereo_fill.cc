@@ -117,11 +117,13 @@ std::string StereoFillResult::BriefReport() const {
   std::snprintf(
       buffer, sizeof(buffer),
       "stereo fill (%s) %s: %d of %d hole pixels filled (%.1f%%), stereo vs sensor median "
-      "error %.2f%% (%.1f mm); rejected by ring %d, by shadow geometry %d, by %s %d",
+      "error %.2f%% (%.1f mm); rejected by ring %d, by shadow geometry %d, by %s %d, seen through "
+      "by another keyframe %d",
       method.c_str(), termination.c_str(), filled_pixels, hole_pixels,
       hole_pixels ? 100.0 * filled_pixels / hole_pixels : 0.0, 100.0 * stereo_error_median,
       1000.0 * stereo_error_median_m, rejected_by_ring, rejected_by_shadow,
-      third_view_used ? "third view" : "(no third view)", rejected_by_photometry);
+      third_view_used ? "third view" : "(no third view)", rejected_by_photometry,
+      rejected_by_free_space);
   return buffer;
 }
 
@@ -198,6 +200,11 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   if (!agrees) {
     result.termination = "stereo disagrees with the sensor (pose or matching)";
     return result;
+  }
+  if (options.validation.free_space_check) {
+    std::vector<ThirdView> views = {{&key2, key1_from_key2}, third};
+    views.insert(views.end(), witnesses.begin(), witnesses.end());
+    RemoveSeenThrough(key1, views, camera, options.validation.free_space_margin, &result);
   }
   if (!sgbm_filled.empty() && cv::countNonZero(sgbm_filled) > 0)
     CorroborateFill(key1, {third}, camera, options.photometric, sgbm_filled, &result);
