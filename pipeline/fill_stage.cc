@@ -123,7 +123,7 @@ nlohmann::ordered_json FillStage::Report() const {
 nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, int dropped,
                                   int not_filled) {
   using json = nlohmann::ordered_json;
-  long holes = 0, filled = 0, carried = 0, corrected = 0, corroborated = 0;
+  long holes = 0, filled = 0, carried = 0, corrected = 0, corroborated = 0, seen_through = 0;
   int paired = 0, rescaled = 0, vertical = 0;
   std::vector<double> errors, ms;
   json list = json::array(), failed = json::array();
@@ -146,6 +146,7 @@ nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, in
     carried += k.carried_pixels;
     corrected += k.corrected_pixels;
     corroborated += k.corroborated_pixels;
+    seen_through += k.seen_through_pixels;
     if (!k.partner.empty()) {
       ++paired;
       ms.push_back(k.ms);
@@ -166,6 +167,7 @@ nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, in
                     {"corrected_pixels", k.corrected_pixels},
                     {"witnesses", k.witnesses},
                     {"corroborated_pixels", k.corroborated_pixels},
+                    {"seen_through_pixels", k.seen_through_pixels},
                     {"fill_rate", k.hole_pixels ? double(k.filled_pixels) / k.hole_pixels : 0.0},
                     {"stereo_error_median_m", k.stereo_error_median_m},
                     {"ms", k.ms},
@@ -178,6 +180,7 @@ nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, in
           {"carried_pixels", carried},
           {"corrected_pixels", corrected},
           {"corroborated_pixels", corroborated},
+          {"seen_through_pixels", seen_through},
           {"stereo_error_median_m", errors.empty() ? json() : json(Median(errors))},
           {"keyframes_filled", static_cast<int>(keyframes.size())},
           {"keyframes_paired", paired},

@@ -108,6 +108,14 @@ TEST(Reconstruction, TracksAndFillsTheSyntheticGlassTable) {
   for (const auto& [path, count] : r["fill"]["pair_paths"].items()) paths += count.get<int>();
   EXPECT_EQ(paths, r["fill"]["keyframes_paired"].get<int>());
   EXPECT_GT(r["fill"]["pair_paths"]["rectified_sgbm"].get<int>(), 0);  // the scene orbits sideways
+  // Fills another keyframe saw through are counted per keyframe (hole pixels) and in total.
+  int seen_through = 0;
+  for (const auto& k : r["fill"]["per_keyframe"]) {
+    seen_through += k["seen_through_pixels"].get<int>();
+    EXPECT_GE(k["seen_through_pixels"].get<int>(), 0);
+    EXPECT_LE(k["seen_through_pixels"].get<int>(), k["hole_pixels"].get<int>());
+  }
+  EXPECT_EQ(seen_through, r["fill"]["seen_through_pixels"].get<int>());
   // The fill: most of the glossy, dark and textured-glass holes, nearly all within 3%; measured
   // pixels never change.
   const std::vector<MaterialScore> m = ScoreByMaterial(c, sink);

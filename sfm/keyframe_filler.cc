@@ -102,6 +102,7 @@ FilledKeyframe KeyframeFiller::Fill(const StereoJob& job) {
       k.third_view = r.third_view_used;
       k.termination = r.termination;
       k.stereo_error_median_m = r.stereo_error_median_m;
+      k.seen_through_pixels = r.rejected_by_free_space;
     } else {
       k.termination = job.choice.reason;
     }

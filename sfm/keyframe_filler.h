@@ -56,6 +56,7 @@ struct KeyframeFill {
   int corrected_pixels = 0;          // own fills the earlier keyframes' consensus replaced
   int witnesses = 0;                 // views that only witnessed the fill (max_witnesses)
   int corroborated_pixels = 0;       // own fills a view outside their pair corroborated
+  int seen_through_pixels = 0;       // stereo fills dropped: another keyframe's sensor saw past
   double stereo_error_median_m = 0;  // stereo vs sensor on pixels both have
   double ms = 0;                     // stereo, validation and carry, milliseconds
 };
