@@ -113,7 +113,7 @@ bool StereoFillOptions::Check(std::string* message) const {
 }
 
 std::string StereoFillResult::BriefReport() const {
-  char buffer[300];
+  char buffer[400];
   std::snprintf(
       buffer, sizeof(buffer),
       "stereo fill (%s) %s: %d of %d hole pixels filled (%.1f%%), stereo vs sensor median "
