@@ -37,8 +37,8 @@ struct ValidationOptions {
   // A filled point that another keyframe's sensor sees through (RemoveSeenThrough: all of the 3x3
   // measured pixels around its projection farther than it by free_space_margin, relative) lies
   // in space that keyframe saw empty, and is dropped. The margin is fusion's free_space_margin:
-  // the map applies the same rule to its surfels, but only with the sensor frames that come after
-  // a fill reaches it.
+  // the map applies a like rule to its surfels (there five measured pixels of the 3x3 suffice),
+  // but only with the sensor frames that come after a fill reaches it.
   bool free_space_check = true;
   double free_space_margin = 0.03;
   bool Check(std::string* message = nullptr) const;

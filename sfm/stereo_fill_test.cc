@@ -90,6 +90,22 @@ RenderedTriple RenderTriple(const std::string& scene_name, uint32_t seed, int i1
           poses[i1].Inverse() * poses[i2], poses[i1].Inverse() * poses[i3]};
 }
 
+// Keyframe a's glossy, dark and textured-glass holes filled with factor times their true depth.
+DepthFill HolesFilledWithTruth(const Rendered& a, double factor) {
+  DepthFill fill = SensorOnly(a.frame);
+  for (int y = 0; y < fill.fill_mask.rows; ++y)
+    for (int x = 0; x < fill.fill_mask.cols; ++x) {
+      const int label = a.truth.label.at<uint8_t>(y, x);
+      const float truth = a.truth.visible_depth.at<float>(y, x);
+      if (a.frame.hole_mask.at<uint8_t>(y, x) == 0 || label < 1 || label > 3 || !(truth > 0))
+        continue;
+      fill.fill_mask.at<uint8_t>(y, x) = 255;
+      fill.filled_depth.at<float>(y, x) = static_cast<float>(factor * truth);
+      ++fill.filled_pixels;
+    }
+  return fill;
+}
+
 // A view that took no part in a fill corroborates it where the fill is right and the view has
 // the parallax to tell: the glossy, dark and textured-glass holes of the synthetic table filled
 // with their true depth are corroborated in part (a quarter: the rest is textureless, hidden or
@@ -98,21 +114,8 @@ RenderedTriple RenderTriple(const std::string& scene_name, uint32_t seed, int i1
 TEST(CorroborateFill, AViewWithParallaxCorroboratesRightFillsAndNotWrongOnes) {
   const RenderedTriple t = RenderTriple("glass-table", 5, 10, 16, 4);
   const Camera camera = synth::SynthCamera();
-  auto filled_with = [&](double factor) {
-    DepthFill fill = SensorOnly(t.a.frame);
-    for (int y = 0; y < fill.fill_mask.rows; ++y)
-      for (int x = 0; x < fill.fill_mask.cols; ++x) {
-        const int label = t.a.truth.label.at<uint8_t>(y, x);
-        const float truth = t.a.truth.visible_depth.at<float>(y, x);
-        if (t.a.frame.hole_mask.at<uint8_t>(y, x) == 0 || label < 1 || label > 3 || !(truth > 0))
-          continue;
-        fill.fill_mask.at<uint8_t>(y, x) = 255;
-        fill.filled_depth.at<float>(y, x) = static_cast<float>(factor * truth);
-      }
-    return fill;
-  };
   auto corroborated_share = [&](double factor, const ThirdView& view) {
-    DepthFill fill = filled_with(factor);
+    DepthFill fill = HolesFilledWithTruth(t.a, factor);
     CorroborateFill(t.a.frame, {view}, camera, PhotometricOptions{}, cv::Mat(), &fill);
     EXPECT_EQ(cv::countNonZero(fill.corroborated & (fill.fill_mask == 0)), 0);
     return static_cast<double>(cv::countNonZero(fill.corroborated)) /
@@ -137,17 +140,7 @@ TEST(RemoveSeenThrough, DropsFillsThatAnotherViewSeesEmptySpaceAt) {
   const RenderedTriple t = RenderTriple("glass-table", 5, 10, 16, 4);
   const Camera camera = synth::SynthCamera();
   auto removed_share = [&](double factor, const ThirdView& view) {
-    DepthFill fill = SensorOnly(t.a.frame);
-    for (int y = 0; y < fill.fill_mask.rows; ++y)
-      for (int x = 0; x < fill.fill_mask.cols; ++x) {
-        const int label = t.a.truth.label.at<uint8_t>(y, x);
-        const float truth = t.a.truth.visible_depth.at<float>(y, x);
-        if (t.a.frame.hole_mask.at<uint8_t>(y, x) == 0 || label < 1 || label > 3 || !(truth > 0))
-          continue;
-        fill.fill_mask.at<uint8_t>(y, x) = 255;
-        fill.filled_depth.at<float>(y, x) = static_cast<float>(factor * truth);
-        ++fill.filled_pixels;
-      }
+    DepthFill fill = HolesFilledWithTruth(t.a, factor);
     const int before = fill.filled_pixels;
     RemoveSeenThrough(t.a.frame, {view}, camera, 0.03, &fill);
     EXPECT_EQ(fill.filled_pixels, cv::countNonZero(fill.fill_mask));
