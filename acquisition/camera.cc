@@ -4,6 +4,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
+#include <set>
 #include <sstream>
 
 #include "acquisition/errors.h"
@@ -215,6 +216,23 @@ CameraFile LoadCameraFile(const std::string& path) {
       throw InputError(path, "\"color_from_depth.rotation\" is not a rotation matrix");
     file.color_from_depth = SE3(rotation, Eigen::Vector3d(x[0], x[1], x[2]));
   }
+  if (j.contains("depth_readout_s")) {
+    const double readout = Number(j, "", "depth_readout_s", path);
+    if (!(readout >= 0 && readout < 1))
+      throw InputError(path, "\"depth_readout_s\" must be a number of seconds in [0, 1)");
+    file.depth_readout_s = readout;
+  }
+  if (j.contains("depth_readout_order")) {
+    if (!j["depth_readout_order"].is_string())
+      throw InputError(path, "\"depth_readout_order\" must be a string");
+    file.depth_readout_order = j["depth_readout_order"].get<std::string>();
+    const std::set<std::string> known = {"top_to_bottom", "bottom_to_top", "left_to_right",
+                                         "right_to_left"};
+    if (!known.count(*file.depth_readout_order))
+      throw InputError(path,
+                       "\"depth_readout_order\" must be top_to_bottom, bottom_to_top, "
+                       "left_to_right or right_to_left");
+  }
   if (!file.depth_registered_to_color && !file.depth_camera)
     throw InputError(
         path, "depth is not registered to colour but \"depth_camera\" intrinsics are missing");
@@ -225,6 +243,8 @@ void SaveCameraFile(const std::string& path, const CameraFile& file) {
   nlohmann::ordered_json j = IntrinsicsJson(file.camera);
   j["depth_scale"] = file.depth_scale;
   j["depth_registered_to_color"] = file.depth_registered_to_color;
+  if (file.depth_readout_s) j["depth_readout_s"] = *file.depth_readout_s;
+  if (file.depth_readout_order) j["depth_readout_order"] = *file.depth_readout_order;
   if (file.depth_camera) {
     j["depth_camera"] = IntrinsicsJson(*file.depth_camera);
     const Eigen::Matrix3d r = file.color_from_depth.RotationMatrix();

@@ -123,6 +123,13 @@ struct CameraFile {
   // and the transform taking points from the depth camera's frame to the colour camera's.
   std::optional<Camera> depth_camera;
   SE3 color_from_depth;
+  // Seconds from the exposure of the depth image's first row to its last (0: a global shutter).
+  // Absent: the tracker's setting, which is the Kinect v1's (registration/rolling_shutter.h).
+  std::optional<double> depth_readout_s;
+  // The order the depth image's lines were exposed in: "top_to_bottom", "bottom_to_top",
+  // "left_to_right" or "right_to_left" (images turned in software after capture). Absent: the
+  // tracker's setting (top to bottom).
+  std::optional<std::string> depth_readout_order;
 };
 
 // Reads camera.json; throws InputError naming the file on a missing file, bad JSON, a missing or

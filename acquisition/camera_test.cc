@@ -62,6 +62,28 @@ TEST(Camera, UnregisteredDepthNeedsADepthCamera) {
   EXPECT_THROW(LoadCameraFile(dir / "camera.json"), InputError);
 }
 
+TEST(Camera, TheDepthSensorsReadoutIsOptionalAndChecked) {
+  testing::TempDir dir;
+  const std::string path = dir / "camera.json";
+  const std::string intrinsics =
+      R"("width": 640, "height": 480, "fx": 5, "fy": 5, "cx": 1, "cy": 1)";
+  WriteText(path, "{" + intrinsics + "}");
+  CameraFile f = LoadCameraFile(path);
+  EXPECT_FALSE(f.depth_readout_s.has_value());
+  EXPECT_FALSE(f.depth_readout_order.has_value());
+  WriteText(path, "{" + intrinsics +
+                      R"(, "depth_readout_s": 0.02, "depth_readout_order": "right_to_left"})");
+  f = LoadCameraFile(path);
+  EXPECT_DOUBLE_EQ(f.depth_readout_s.value_or(-1), 0.02);
+  EXPECT_EQ(f.depth_readout_order.value_or(""), "right_to_left");
+  SaveCameraFile(path, f);
+  EXPECT_DOUBLE_EQ(LoadCameraFile(path).depth_readout_s.value_or(-1), 0.02);
+  WriteText(path, "{" + intrinsics + R"(, "depth_readout_s": -1})");
+  EXPECT_THROW(LoadCameraFile(path), InputError);
+  WriteText(path, "{" + intrinsics + R"(, "depth_readout_order": "diagonal"})");
+  EXPECT_THROW(LoadCameraFile(path), InputError);
+}
+
 TEST(Camera, BadFilesGiveOneLineErrorsNamingFileAndProblem) {
   testing::TempDir dir;
   const std::string path = dir / "camera.json";

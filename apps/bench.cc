@@ -284,6 +284,8 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   source_options.load_color = true;  // our SURF features and RgbdOdometry need intensity
   std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, source_options);
   const Camera camera = source->camera();
+  BenchOptions resolved = options;  // with the sensor's readout time (camera.json)
+  resolved.pipeline.tracker = ForSensor(options.pipeline.tracker, source->camera_file());
 
   std::vector<RgbdFrame> frames;
   {
@@ -302,14 +304,14 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   if (!gt_path.empty()) gt = ReadTrajectory(gt_path);
 
   std::vector<MethodResult> results;
-  results.push_back(TrackFrames(frames, camera, options));
+  results.push_back(TrackFrames(frames, camera, resolved));
   nlohmann::ordered_json loop_closure;
   if (options.loop_closure) {
     MethodResult m;
-    loop_closure = BenchLoopClosure(frames, source->camera_file(), options, &m);
+    loop_closure = BenchLoopClosure(frames, source->camera_file(), resolved, &m);
     results.push_back(std::move(m));
   }
-  if (options.frame_to_model) results.push_back(TrackFramesToModel(frames, camera, options));
+  if (options.frame_to_model) results.push_back(TrackFramesToModel(frames, camera, resolved));
   nlohmann::ordered_json stereo_fill;
   if (options.fill_every > 0)
     stereo_fill = BenchStereoFill(frames, results.front().trajectory, camera, options);
@@ -331,7 +333,7 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   if (!stereo_fill.is_null()) out["stereo_fill"] = stereo_fill;
   if (!fusion.is_null()) out["fusion"] = fusion;
   if (!loop_closure.is_null()) out["loop_closure"] = loop_closure;
-  out["settings"] = SettingsToJson(options.pipeline);
+  out["settings"] = SettingsToJson(resolved.pipeline);
   return out;
 }
 

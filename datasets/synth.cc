@@ -89,6 +89,14 @@ bool SynthOptions::Check(std::string* message) const {
 
 Camera SynthCamera() { return Camera{}; }  // 640x480, fx = fy = 525, cx 319.5, cy 239.5
 
+CameraFile SynthCameraFile() {
+  CameraFile file;
+  file.camera = SynthCamera();
+  file.depth_scale = 5000.0;
+  file.depth_readout_s = 0.0;
+  return file;
+}
+
 std::vector<SE3> MakeTrajectory(const Scene& scene, const SynthOptions& options) {
   std::vector<SE3> poses;
   const int n = options.frames;
@@ -290,9 +298,7 @@ SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = Scene::Make(options.scene, options.seed);
   const Camera camera = SynthCamera();
-  CameraFile camera_file;
-  camera_file.camera = camera;
-  camera_file.depth_scale = 5000.0;
+  const CameraFile camera_file = SynthCameraFile();
   const std::vector<SE3> poses = MakeTrajectory(scene, options);
 
   SynthSummary summary;

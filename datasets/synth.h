@@ -85,6 +85,9 @@ inline bool AtClearGlassDepth(double fill, double glass, double background) {
 
 // The camera every synthetic dataset uses (640x480, fx = fy = 525, no distortion).
 Camera SynthCamera();
+// Its camera.json: depth in units of 1/5000 m, and a global shutter (every pixel of a frame is
+// rendered at the frame's pose: depth_readout_s 0).
+CameraFile SynthCameraFile();
 // world_from_camera of frame i.
 std::vector<SE3> MakeTrajectory(const Scene& scene, const SynthOptions& options);
 // Renders one frame; frame_index seeds its sensor noise.

@@ -24,7 +24,7 @@ struct LoopCapture {
 const LoopCapture& Loop() {
   static const LoopCapture capture = [] {
     LoopCapture c;
-    c.camera.camera = synth::SynthCamera();
+    c.camera = synth::SynthCameraFile();
     synth::SynthOptions options;
     options.frames = 72;
     options.seed = 5;

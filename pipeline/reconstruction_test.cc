@@ -27,7 +27,7 @@ struct Capture {
 const Capture& GlassTable() {
   static const Capture capture = [] {
     Capture c;
-    c.camera.camera = synth::SynthCamera();
+    c.camera = synth::SynthCameraFile();
     synth::SynthOptions options;
     options.frames = 30;
     options.seed = 4;

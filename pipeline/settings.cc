@@ -21,7 +21,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(KeyframePolicy, max_rotation_deg, max_transla
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(TrackerOptions, pyramid_levels, icp, use_features, surf, match,
                                    ransac, restart_m, restart_deg, keyframes, constant_velocity,
                                    max_jump_m, max_jump_deg, relocalise_frames,
-                                   simulated_drift_deg_per_m)
+                                   simulated_drift_deg_per_m, depth_readout_s, depth_readout_order)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PoseRefinementOptions, reprojection_px, min_inliers,
                                    max_change_m, max_change_deg, photometric,
                                    photometric_iterations)

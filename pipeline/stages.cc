@@ -82,7 +82,7 @@ TrackStage::~TrackStage() {
 void TrackStage::Stop() { stop_ = true; }
 
 void TrackStage::Run() {
-  FrameToKeyframeTracker tracker(source_.camera(), options_);
+  FrameToKeyframeTracker tracker(source_.camera(), ForSensor(options_, source_.camera_file()));
   tracker.SetRelocaliser(loop_);
   FrameItem item;
   while (!stop_ && queue_->Pop(&item)) {
@@ -112,6 +112,14 @@ void TrackStage::Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker) 
   record_.restarted += r.status == TrackingStatus::kRestarted;
   if (r.status != TrackingStatus::kTracking && r.status != TrackingStatus::kInitialized)
     spdlog::debug("frame {} ({}): {}", frame.index, frame.timestamp_text, r.BriefReport());
+  // The depth the pose places in the map: moved to the stamp's instant where tracking modelled the
+  // rolling shutter (the sensor's holes stay holes). The fill keeps the frame as measured: its
+  // outputs keep the sensor's pixels as they were, and its stereo comes from the colour images.
+  RgbdFrame placed = frame;
+  if (!r.depth_at_stamp.empty()) {
+    placed.depth = r.depth_at_stamp;
+    if (!frame.hole_mask.empty()) placed.depth.setTo(0.f, frame.hole_mask);
+  }
   if (r.new_keyframe) OfferKeyframe(frame, r, keyframe);
   ++record_.frames;
   if (!r.has_pose()) {
@@ -121,7 +129,7 @@ void TrackStage::Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker) 
     return;
   }
   if (fusion_) {
-    fusion_->OfferFrame(frame, r.world_from_camera, keyframe);
+    fusion_->OfferFrame(placed, r.world_from_camera, keyframe);
     ++offered_to_fusion_;
   }
   record_.trajectory.push_back({frame.timestamp, frame.timestamp_text, r.world_from_camera});

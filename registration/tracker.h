@@ -35,6 +35,7 @@
 #include "registration/frame_features.h"
 #include "registration/icp.h"
 #include "registration/ransac.h"
+#include "registration/rolling_shutter.h"
 #include "registration/surf.h"
 
 namespace gf {
@@ -66,6 +67,15 @@ struct TrackerOptions {
   double restart_deg = 2.0;
   KeyframePolicy keyframes;
   bool constant_velocity = true;  // predict with the last inter-frame motion
+  // Time from the exposure of the depth image's first row to its last, seconds (0: a global
+  // shutter, as synthetic data and time-of-flight cameras have). The Kinect v1's depth comes from
+  // a rolling-shutter infrared sensor read out over the frame period: 1/30 s at 30 frames/s
+  // (rolling_shutter.h). With it, each frame is first aligned as the sensor gave it; the motion
+  // since the last frame, so measured, moves the frame's points to its stamp's instant; the moved
+  // frame is aligned again, and its pose is the camera's at the stamp.
+  double depth_readout_s = 1.0 / 30.0;
+  // The order of the readout's lines (rolling_shutter.h): camera.json's depth_readout_order.
+  std::string depth_readout_order = "top_to_bottom";
   double max_jump_m = 0.15;       // larger correction of the prediction: treated as lost
   double max_jump_deg = 15.0;
   // After a loss, frames looked up among earlier keyframes (with a Relocaliser) before tracking
@@ -117,10 +127,16 @@ struct TrackingResult {
   RansacReport ransac;  // feature alignment to the keyframe (empty when features are off)
   IcpSummary icp;               // alignment to the keyframe
   cv::Mat tracked_depth;        // the frame's depth as tracking used it (on pinhole_camera())
+  // The frame's depth moved to its stamp's instant (depth_readout_s), on the input camera's
+  // pixels: what the pose places in the world. Empty when the frame was not moved.
+  cv::Mat depth_at_stamp;
   std::shared_ptr<const FrameFeatures> features;  // the frame's (empty without colour)
   std::optional<Relocalisation> relocalisation;   // kRelocalised only
   std::string BriefReport() const;
 };
+
+// The options with the sensor's own depth readout (time, order) where its camera.json gives it.
+TrackerOptions ForSensor(TrackerOptions options, const CameraFile& camera);
 
 class Tracker {
  public:
@@ -152,10 +168,16 @@ class FrameToKeyframeTracker : public Tracker {
   // Aligns the frame to the keyframe from keyframe_from_predicted (features re-seed it when the
   // prediction is off); fills result->ransac, icp, overlap. True when ICP succeeded without an
   // implausible jump from the prediction.
-  bool AlignToKeyframe(const DepthPyramid& current, const FrameFeatures& features,
-                       SE3 keyframe_from_predicted, TrackingResult* result) const;
-  // The frame becomes the keyframe at world_from_camera.
-  void MakeKeyframe(DepthPyramid current, FeaturesPtr features, const SE3& world_from_camera);
+  bool AlignToKeyframe(const DepthPyramid& reference, const DepthPyramid& current,
+                       const FrameFeatures& features, SE3 keyframe_from_predicted,
+                       TrackingResult* result) const;
+  // The frame, aligned as the sensor gave it (result->icp against raw_keyframe_), moved to its
+  // stamp's instant with the motion since the last frame and aligned again against keyframe_
+  // (depth_readout_s). Replaces *current, result->icp and tracked_depth when that succeeds.
+  void AlignAtStamp(const RgbdFrame& input, DepthPyramid* current, TrackingResult* result);
+  // The frame becomes the keyframe at world_from_camera (`raw`: its depth as the sensor gave it).
+  void MakeKeyframe(DepthPyramid current, FeaturesPtr features, const SE3& world_from_camera,
+                    DepthPyramid raw = {});
   TrackingResult TrackWhileLost(const RgbdFrame& frame, DepthPyramid current,
                                 FeaturesPtr features, TrackingResult result);
   void RefineAgainstModel(const DepthPyramid& model, const DepthPyramid& current,
@@ -169,6 +191,7 @@ class FrameToKeyframeTracker : public Tracker {
 
   Camera camera_;
   Camera pinhole_;                   // camera_ without distortion
+  RollingShutter shutter_;           // the depth sensor's, on camera_
   cv::Mat undistort_x_, undistort_y_;  // cv::remap maps (empty: no distortion)
   TrackerOptions options_;
   Relocaliser* relocaliser_ = nullptr;
@@ -179,6 +202,13 @@ class FrameToKeyframeTracker : public Tracker {
   SE3 world_from_keyframe_;
   SE3 world_from_previous_;
   SE3 velocity_;  // previous_from_current of the last step
+  // Rolling shutter (depth_readout_s): the keyframe's depth as the sensor gave it, the last
+  // frame's alignment to it, and that frame's stamp; motion_known_ when the last frame was
+  // aligned to the current keyframe (else the next frame is not moved).
+  DepthPyramid raw_keyframe_;
+  SE3 raw_keyframe_from_previous_;
+  double previous_time_ = 0, frame_time_ = 0;  // the last frame's stamp, this frame's
+  bool motion_known_ = false;
   int keyframes_ = 0;
   DepthPyramid model_;  // the model's depth at world_from_model_ (empty: none for the next frame)
   SE3 world_from_model_;

@@ -11,7 +11,9 @@ Pixel (u, v) of a W x H image goes to (H - 1 - v, u). With the new camera axes x
 z' = z: fx' = fy, fy' = fx, cx' = H - 1 - cy, cy' = cx; the radial distortion terms are unchanged
 and the tangential ones become p1' = p2, p2' = -p1 (Brown-Conrady, as OpenCV and camera.json);
 each ground-truth pose world_from_camera is followed by camera_from_rotated (z' = z, a quarter
-turn).
+turn). The depth sensor's rows turn with the images (a camera held on its side would still read
+its rows down its own images): camera.json's depth_readout_order says so (the first row is now
+the last column).
 """
 import json
 import os
@@ -45,6 +47,10 @@ def rotate_camera(camera):
     if len(d) >= 4:
         d[2], d[3] = d[3], -d[2]
         out["distortion"] = d
+    # The sensor's lines turn with the image: its first row becomes the last column.
+    turned = {"top_to_bottom": "right_to_left", "right_to_left": "bottom_to_top",
+              "bottom_to_top": "left_to_right", "left_to_right": "top_to_bottom"}
+    out["depth_readout_order"] = turned[camera.get("depth_readout_order", "top_to_bottom")]
     return out
 
 
