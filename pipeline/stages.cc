@@ -117,7 +117,7 @@ void TrackStage::Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker) 
   // outputs keep the sensor's pixels as they were, and its stereo comes from the colour images.
   RgbdFrame placed = frame;
   if (!r.depth_at_stamp.empty()) {
-    placed.depth = r.depth_at_stamp;
+    placed.depth = r.depth_at_stamp.clone();  // may share its pixels with r.tracked_depth
     if (!frame.hole_mask.empty()) placed.depth.setTo(0.f, frame.hole_mask);
   }
   if (r.new_keyframe) OfferKeyframe(frame, r, keyframe);
