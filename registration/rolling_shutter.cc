@@ -37,16 +37,16 @@ cv::Mat RollingShutter::DepthAtLastRow(const cv::Mat& depth,
   cv::Mat out(depth.size(), CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
   // The time of pixel (x, y) relative to the stamp: its line's share of the readout, minus 1.
   auto line_time = [&](int x, int y) {
-    const double h = depth.rows, w = depth.cols;
+    const double rows = depth.rows, cols = depth.cols;
     switch (order_) {
       case ReadoutOrder::kBottomToTop:
-        return ((h - y - 0.5) / h - 1.0) * readout_s;
+        return ((rows - y - 0.5) / rows - 1.0) * readout_s;
       case ReadoutOrder::kLeftToRight:
-        return ((x + 0.5) / w - 1.0) * readout_s;
+        return ((x + 0.5) / cols - 1.0) * readout_s;
       case ReadoutOrder::kRightToLeft:
-        return ((w - x - 0.5) / w - 1.0) * readout_s;
+        return ((cols - x - 0.5) / cols - 1.0) * readout_s;
       default:
-        return ((y + 0.5) / h - 1.0) * readout_s;
+        return ((y + 0.5) / rows - 1.0) * readout_s;
     }
   };
   for (int y = 0; y < depth.rows; ++y) {
@@ -61,9 +61,11 @@ cv::Mat RollingShutter::DepthAtLastRow(const cv::Mat& depth,
       if (!(q.z() > 0)) continue;
       own[x] = static_cast<float>(q.z());
       const Eigen::Vector2d uv = camera.ProjectDistorted(q);
+      if (!(uv.x() > -0.5 && uv.y() > -0.5 && uv.x() < depth.cols - 0.5 &&
+            uv.y() < depth.rows - 0.5))
+        continue;  // left the image (or not a number)
       const int u = static_cast<int>(std::lround(uv.x())),
                 r = static_cast<int>(std::lround(uv.y()));
-      if (u < 0 || r < 0 || u >= depth.cols || r >= depth.rows) continue;
       float& target = out.at<float>(r, u);
       target = std::min(target, own[x]);
     }
