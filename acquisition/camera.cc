@@ -4,8 +4,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
-#include <set>
 #include <sstream>
+#include <utility>
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
@@ -174,6 +174,20 @@ nlohmann::ordered_json IntrinsicsJson(const Camera& c) {
 
 }  // namespace
 
+bool ParseReadoutOrder(const std::string& text, ReadoutOrder* order) {
+  const std::pair<const char*, ReadoutOrder> names[] = {
+      {"top_to_bottom", ReadoutOrder::kTopToBottom},
+      {"bottom_to_top", ReadoutOrder::kBottomToTop},
+      {"left_to_right", ReadoutOrder::kLeftToRight},
+      {"right_to_left", ReadoutOrder::kRightToLeft}};
+  for (const auto& [name, value] : names)
+    if (text == name) {
+      *order = value;
+      return true;
+    }
+  return false;
+}
+
 CameraFile LoadCameraFile(const std::string& path) {
   const std::string text = ReadTextFile(path);
   nlohmann::json j;
@@ -226,9 +240,8 @@ CameraFile LoadCameraFile(const std::string& path) {
     if (!j["depth_readout_order"].is_string())
       throw InputError(path, "\"depth_readout_order\" must be a string");
     file.depth_readout_order = j["depth_readout_order"].get<std::string>();
-    const std::set<std::string> known = {"top_to_bottom", "bottom_to_top", "left_to_right",
-                                         "right_to_left"};
-    if (!known.count(*file.depth_readout_order))
+    ReadoutOrder order;
+    if (!ParseReadoutOrder(*file.depth_readout_order, &order))
       throw InputError(path,
                        "\"depth_readout_order\" must be top_to_bottom, bottom_to_top, "
                        "left_to_right or right_to_left");

@@ -114,6 +114,12 @@ class UndistortedPixels {
   std::vector<Eigen::Vector2d> nodes_;
 };
 
+// The order in which a depth sensor exposes its image's lines (camera.json's
+// depth_readout_order; registration/rolling_shutter.h).
+enum class ReadoutOrder { kTopToBottom, kBottomToTop, kLeftToRight, kRightToLeft };
+// "top_to_bottom", "bottom_to_top", "left_to_right", "right_to_left"; false for anything else.
+bool ParseReadoutOrder(const std::string& text, ReadoutOrder* order);
+
 // Everything camera.json holds.
 struct CameraFile {
   Camera camera;

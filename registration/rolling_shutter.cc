@@ -7,20 +7,6 @@
 
 namespace gf {
 
-bool ParseReadoutOrder(const std::string& text, ReadoutOrder* order) {
-  const std::pair<const char*, ReadoutOrder> names[] = {
-      {"top_to_bottom", ReadoutOrder::kTopToBottom},
-      {"bottom_to_top", ReadoutOrder::kBottomToTop},
-      {"left_to_right", ReadoutOrder::kLeftToRight},
-      {"right_to_left", ReadoutOrder::kRightToLeft}};
-  for (const auto& [name, value] : names)
-    if (text == name) {
-      *order = value;
-      return true;
-    }
-  return false;
-}
-
 RollingShutter::RollingShutter(const Camera& camera, double readout_s, ReadoutOrder order)
     : camera_(camera), rays_(camera), readout_s_(readout_s), order_(order) {
   GF_CHECK(readout_s >= 0, "rolling shutter: readout time must be >= 0");
@@ -28,16 +14,14 @@ RollingShutter::RollingShutter(const Camera& camera, double readout_s, ReadoutOr
 
 cv::Mat RollingShutter::DepthAtLastRow(const cv::Mat& depth,
                                        const SE3::Tangent& twist_per_s) const {
-  const Camera& camera = camera_;
-  const double readout_s = readout_s_;
-  GF_CHECK(depth.type() == CV_32FC1 && depth.cols == camera.width && depth.rows == camera.height,
+  GF_CHECK(depth.type() == CV_32FC1 && depth.cols == camera_.width && depth.rows == camera_.height,
            "rolling shutter: CV_32F depth of the camera's size");
   const Eigen::Vector3d v = twist_per_s.head<3>(), w = twist_per_s.tail<3>();
   cv::Mat moved_z(depth.size(), CV_32FC1, cv::Scalar(0));  // each pixel's own point, moved
   cv::Mat out(depth.size(), CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
   // The time of pixel (x, y) relative to the stamp: its line's share of the readout, minus 1.
   auto line_time = [&](int x, int y) {
-    const double rows = depth.rows, cols = depth.cols;
+    const double rows = depth.rows, cols = depth.cols, readout_s = readout_s_;
     switch (order_) {
       case ReadoutOrder::kBottomToTop:
         return ((rows - y - 0.5) / rows - 1.0) * readout_s;
@@ -60,7 +44,7 @@ cv::Mat RollingShutter::DepthAtLastRow(const cv::Mat& depth,
       const Eigen::Vector3d q = p + (w.cross(p) + v) * dt;
       if (!(q.z() > 0)) continue;
       own[x] = static_cast<float>(q.z());
-      const Eigen::Vector2d uv = camera.ProjectDistorted(q);
+      const Eigen::Vector2d uv = camera_.ProjectDistorted(q);
       if (!(uv.x() > -0.5 && uv.y() > -0.5 && uv.x() < depth.cols - 0.5 &&
             uv.y() < depth.rows - 0.5))
         continue;  // left the image (or not a number)

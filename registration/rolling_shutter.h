@@ -21,17 +21,11 @@
 #pragma once
 
 #include <opencv2/core.hpp>
-#include <string>
 
 #include "acquisition/camera.h"
 #include "acquisition/se3.h"
 
 namespace gf {
-
-// The order in which the image's lines were exposed, as camera.json names it.
-enum class ReadoutOrder { kTopToBottom, kBottomToTop, kLeftToRight, kRightToLeft };
-// "top_to_bottom", "bottom_to_top", "left_to_right", "right_to_left"; false for anything else.
-bool ParseReadoutOrder(const std::string& text, ReadoutOrder* order);
 
 // The depth image as seen at the last row's instant by a camera moving with `twist_per_s`, on
 // the camera's own pixels (with its lens distortion): every measured point moved by the formula

@@ -2,18 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/testing.h"
+
 namespace gf {
 namespace {
 
-Camera Pinhole() {
-  Camera c;
-  c.width = 64;
-  c.height = 48;
-  c.fx = c.fy = 50;
-  c.cx = 31.5;
-  c.cy = 23.5;
-  return c;
-}
+Camera Pinhole() { return testing::PinholeCamera(64, 48, 50); }
 
 TEST(DepthAtLastRow, LeavesAStillCamerasDepthAsItIs) {
   cv::Mat depth(48, 64, CV_32FC1, cv::Scalar(1.5f));

@@ -13,6 +13,28 @@ namespace {
 // The synthetic frames are rendered at one pose each.
 TrackerOptions GlobalShutter() { return ForSensor(TrackerOptions{}, synth::SynthCameraFile()); }
 
+// `frames` tracked from the first on the synthetic camera; ATE against poses[frame.index].
+struct TrackedRun {
+  double ate_m = 0;
+  int lost = 0;          // frames reported lost
+  int without_pose = 0;  // frames without a pose (lost or restarted)
+};
+TrackedRun TrackFrames(const std::vector<RgbdFrame>& frames, const std::vector<SE3>& poses,
+                       const TrackerOptions& options) {
+  FrameToKeyframeTracker tracker(synth::SynthCamera(), options);
+  Trajectory gt, est;
+  TrackedRun run;
+  for (const RgbdFrame& f : frames) {
+    const TrackingResult r = tracker.Track(f);
+    run.lost += r.status == TrackingStatus::kLost;
+    run.without_pose += !r.has_pose();
+    gt.push_back({f.timestamp, "", poses[f.index]});
+    est.push_back({f.timestamp, "", r.world_from_camera});
+  }
+  run.ate_m = EvaluateTrajectory(gt, est).ate_rmse_m;
+  return run;
+}
+
 RgbdFrame SynthDepthFrame(const synth::Scene& scene, const SE3& pose, int index) {
   const synth::SynthFrame f =
       synth::RenderFrame(scene, synth::SynthCamera(), pose, synth::KinectModelOptions{}, 4, index);
@@ -55,16 +77,9 @@ TEST(FrameToKeyframeTracker, FeaturesCarryASuddenJump) {
   auto ate = [&](bool use_features, int* lost) {
     TrackerOptions tracker_options = GlobalShutter();
     tracker_options.use_features = use_features;
-    FrameToKeyframeTracker tracker(synth::SynthCamera(), tracker_options);
-    Trajectory gt, est;
-    *lost = 0;
-    for (const RgbdFrame& f : frames) {
-      const TrackingResult r = tracker.Track(f);
-      *lost += r.status == TrackingStatus::kLost;
-      gt.push_back({f.timestamp, "", poses[f.index]});
-      est.push_back({f.timestamp, "", r.world_from_camera});
-    }
-    return EvaluateTrajectory(gt, est).ate_rmse_m;
+    const TrackedRun run = TrackFrames(frames, poses, tracker_options);
+    *lost = run.lost;
+    return run.ate_m;
   };
   int lost_with = 0, lost_without = 0;
   const double with_features = ate(true, &lost_with);
@@ -124,12 +139,6 @@ TEST(FrameToKeyframeTracker, LeavesTheCallersFrameAsItWas) {
   }
 }
 
-}  // namespace
-}  // namespace gf
-
-namespace gf {
-namespace {
-
 SE3 Between(const SE3& a, const SE3& b, double s) {
   return a * SE3::Exp(s * (a.Inverse() * b).Log());
 }
@@ -174,15 +183,9 @@ TEST(FrameToKeyframeTracker, ModelsTheDepthSensorsRollingShutter) {
   auto ate = [&](double readout_s) {
     TrackerOptions tracker_options;
     tracker_options.depth_readout_s = readout_s;
-    FrameToKeyframeTracker tracker(synth::SynthCamera(), tracker_options);
-    Trajectory gt, est;
-    for (const RgbdFrame& f : frames) {
-      const TrackingResult r = tracker.Track(f);
-      EXPECT_TRUE(r.has_pose()) << r.BriefReport();
-      gt.push_back({f.timestamp, "", poses[f.index]});
-      est.push_back({f.timestamp, "", r.world_from_camera});
-    }
-    return EvaluateTrajectory(gt, est).ate_rmse_m;
+    const TrackedRun run = TrackFrames(frames, poses, tracker_options);
+    EXPECT_EQ(run.without_pose, 0) << "readout " << readout_s << " s";
+    return run.ate_m;
   };
   const double modelled = ate(1.0 / 30), ignored = ate(0);
   std::printf("rolling shutter: ATE %.4f m with the readout modelled, %.4f m without\n", modelled,

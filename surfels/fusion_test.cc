@@ -39,15 +39,7 @@ RgbdFrame Wall(const Camera& camera, const SE3& world_from_camera, float wall_z 
   return f;
 }
 
-Camera SmallCamera() {
-  Camera c;
-  c.width = 160;
-  c.height = 120;
-  c.fx = c.fy = 130;
-  c.cx = 79.5;
-  c.cy = 59.5;
-  return c;
-}
+Camera SmallCamera() { return testing::PinholeCamera(160, 120, 130); }
 
 SE3 At(double x, double y, double z) {
   return SE3(Eigen::Matrix3d::Identity(), Eigen::Vector3d(x, y, z));

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/testing.h"
+
 namespace gf {
 namespace {
 
@@ -20,15 +22,7 @@ std::vector<Surfel> Square() {
   return out;
 }
 
-Camera SmallCamera() {
-  Camera camera;
-  camera.width = 320;
-  camera.height = 240;
-  camera.fx = camera.fy = 300;
-  camera.cx = 159.5;
-  camera.cy = 119.5;
-  return camera;
-}
+Camera SmallCamera() { return testing::PinholeCamera(320, 240, 300); }
 
 TEST(RenderSurfels, DrawsTheSquareAtItsDepthWithItsColour) {
   const Camera camera = SmallCamera();

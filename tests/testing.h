@@ -23,6 +23,18 @@ inline Camera TumFr1Camera() {
   return c;
 }
 
+// A pinhole camera of width x height pixels, focal length `focal` (pixels) both ways, the
+// principal point at the image's centre, no distortion.
+inline Camera PinholeCamera(int width, int height, double focal) {
+  Camera c;
+  c.width = width;
+  c.height = height;
+  c.fx = c.fy = focal;
+  c.cx = 0.5 * (width - 1);
+  c.cy = 0.5 * (height - 1);
+  return c;
+}
+
 // Path of a folder in ../shared/datasets, or "" when the datasets are not on this machine.
 inline std::string SharedDataset(const std::string& name) {
   const std::filesystem::path p = std::filesystem::path(GF_SHARED_DATASETS) / name;
