@@ -145,10 +145,10 @@ bool ValidationOptions::Check(std::string* message) const {
 }
 
 bool PhotometricOptions::Check(std::string* message) const {
-  if (patch_px < 3 || patch_px % 2 == 0 || !(min_ncc > -1) || !(min_patch_std >= 0) ||
+  if (patch_px < 3 || patch_px > 99 || patch_px % 2 == 0 || !(min_ncc > -1) || !(min_patch_std >= 0) ||
       !(max_mean_difference > 0) || !(occlusion_margin >= 0) || !(corroboration_depth_step > 0) ||
       !(corroboration_shift_px >= 0)) {
-    if (message) *message = "photometric check: odd patch >= 3, min_ncc > -1, positive thresholds";
+    if (message) *message = "photometric check: odd patch in 3..99, min_ncc > -1, positive thresholds";
     return false;
   }
   return true;
@@ -200,16 +200,17 @@ double PhotometricCheck::Agreement(int x, int y, double depth, bool* corroborate
   const float sensor3 = third_.frame->depth.at<float>(qy, qx);
   if (sensor3 > 0 && sensor3 < p3.z() * (1.0 - options_.occlusion_margin)) return 1.0;
   const bool hole_only = options_.hole_patches && holes1_.at<uint8_t>(y, x) != 0;
-  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
-  int count = 0;
+  // Integer sums of 8-bit grey levels (a patch of up to 99 x 99 pixels stays below 2^31): exact,
+  // and branch-free (a pixel left out weighs 0), so that the rows vectorise.
+  int32_t sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0, count = 0;
   for (int dy = -r; dy <= r; ++dy) {
     const uint8_t* holes = holes1_.ptr<uint8_t>(y + dy) + x;
     const uint8_t* a_row = gray1_.ptr<uint8_t>(y + dy) + x;
     const uint8_t* b_row = gray3_.ptr<uint8_t>(qy + dy) + qx;
     for (int dx = -r; dx <= r; ++dx) {
-      if (hole_only && holes[dx] == 0) continue;
-      const double a = a_row[dx], b = b_row[dx];
-      ++count;
+      const int32_t w = hole_only ? (holes[dx] != 0) : 1;
+      const int32_t a = w * a_row[dx], b = w * b_row[dx];
+      count += w;
       sa += a;
       sb += b;
       saa += a * a;
@@ -217,15 +218,16 @@ double PhotometricCheck::Agreement(int x, int y, double depth, bool* corroborate
       sab += a * b;
     }
   }
-  const double ma = sa / count, mb = sb / count;
-  const double va = std::max(0.0, saa / count - ma * ma), vb = std::max(0.0, sbb / count - mb * mb);
+  const double ma = static_cast<double>(sa) / count, mb = static_cast<double>(sb) / count;
+  const double va = std::max(0.0, static_cast<double>(saa) / count - ma * ma),
+               vb = std::max(0.0, static_cast<double>(sbb) / count - mb * mb);
   const double min_var = options_.min_patch_std * options_.min_patch_std;
   if (va < min_var || vb < min_var) {
     const double diff = std::abs(ma - mb);
     return diff <= options_.max_mean_difference ? 1.0 - 0.5 * diff / options_.max_mean_difference
                                                 : 0.0;
   }
-  const double ncc = (sab / count - ma * mb) / std::sqrt(va * vb);
+  const double ncc = (static_cast<double>(sab) / count - ma * mb) / std::sqrt(va * vb);
   if (ncc < options_.min_ncc) return 0.0;
   if (corroborates) {
     // How far a corroboration_depth_step change of the depth moves the point in the third view.

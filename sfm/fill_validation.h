@@ -45,7 +45,7 @@ struct ValidationOptions {
 };
 
 struct PhotometricOptions {
-  int patch_px = 15;  // patch side compared in the third view, pixels (odd)
+  int patch_px = 15;  // patch side compared in the third view, pixels (odd, 3..99)
   // A hole pixel's patch uses keyframe 1's hole pixels only, so that a measured surface beside
   // the hole (a label above clear glass) cannot make it match at that surface's depth.
   bool hole_patches = true;
