@@ -43,9 +43,10 @@ FillStage::~FillStage() {
   worker_.Join();
 }
 
-bool FillStage::Offer(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe) {
-  if (options_.drop_when_busy ? queue_.TryPush({frame, world_from_camera, keyframe})
-                              : queue_.Push({frame, world_from_camera, keyframe})) {
+bool FillStage::Offer(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe,
+                      const cv::Mat& measured_depth) {
+  Offered item{frame, world_from_camera, keyframe, measured_depth};
+  if (options_.drop_when_busy ? queue_.TryPush(std::move(item)) : queue_.Push(std::move(item))) {
     ++accepted_;
     return true;
   }
@@ -81,7 +82,10 @@ void FillStage::Run() {
   KeyframeFiller filler(camera_, options_.Filler());
   Offered item;
   while (!cancelled_ && queue_.Pop(&item)) {
-    keyframe_of_.push_back(item.keyframe);  // the filler numbers keyframes as they arrive
+    // The filler numbers keyframes as they arrive.
+    if (!item.measured_depth.empty())
+      measured_of_[static_cast<int>(keyframe_of_.size())] = item.measured_depth;
+    keyframe_of_.push_back(item.keyframe);
     for (const FilledKeyframe& k : filler.Add(item.frame, item.world_from_camera)) Write(k);
   }
   if (!cancelled_)
@@ -96,7 +100,17 @@ void FillStage::Write(const FilledKeyframe& k) {
   if (k.partner) spdlog::debug("fill {}: {}", r.timestamp, k.stereo.BriefReport());
   if (r.carried_pixels + r.corrected_pixels > 0)
     spdlog::debug("fill {}: {}", r.timestamp, k.fill.BriefReport());
-  sink_->WriteKeyframe(r.timestamp, k.key->frame, k.fill);  // a write failure stops the stage
+  const auto measured = measured_of_.find(k.key->id);
+  if (measured == measured_of_.end()) {
+    sink_->WriteKeyframe(r.timestamp, k.key->frame, k.fill);  // a write failure stops the stage
+  } else {
+    // The sensor's pixels as measured; the fill's where it measured nothing.
+    CarriedFillResult written = k.fill;
+    written.filled_depth = k.fill.filled_depth.clone();
+    measured->second.copyTo(written.filled_depth, written.fill_mask == 0);
+    measured_of_.erase(measured);
+    sink_->WriteKeyframe(r.timestamp, k.key->frame, written);
+  }
   if (fusion_) {
     const int id = k.key->id;
     fusion_->OfferFill(k, id >= 0 && id < static_cast<int>(keyframe_of_.size()) &&

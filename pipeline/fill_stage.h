@@ -19,6 +19,7 @@
 
 #include <atomic>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -66,7 +67,11 @@ class FillStage {
 
   // False when the keyframe was dropped (queue full and drop_when_busy, or the stage stopped).
   // `keyframe` is the tracker's number for it (what the fusion stage corrects poses by).
-  bool Offer(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe = -1);
+  // measured_depth: when frame.depth was moved to the stamp's instant (the rolling-shutter model),
+  // the depth as the sensor gave it. The stereo fills the moved frame, whose depth agrees with the
+  // pose; the written keyframe keeps the sensor's pixels as measured (empty: frame.depth is).
+  bool Offer(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe = -1,
+             const cv::Mat& measured_depth = cv::Mat());
   // Processes what is queued, pairs the last keyframes, joins the worker. Rethrows a worker error
   // (a keyframe that could not be written). While it waits, `poll` (may be empty) is called
   // every 50 ms; when it returns true the rest is cancelled.
@@ -84,6 +89,7 @@ class FillStage {
     RgbdFrame frame;
     SE3 world_from_camera;
     int keyframe = -1;
+    cv::Mat measured_depth;  // empty: frame.depth is as measured
   };
   void Run();
   void Write(const FilledKeyframe& k);
@@ -94,6 +100,7 @@ class FillStage {
   FusionStage* fusion_;
   BoundedQueue<Offered> queue_;
   std::vector<int> keyframe_of_;  // the filler's keyframe ids (arrival order) -> the tracker's
+  std::map<int, cv::Mat> measured_of_;  // filler id -> measured depth, until the keyframe is written
   mutable std::mutex done_mutex_;
   std::vector<KeyframeFill> done_;  // written by the worker
   std::atomic<int> done_count_{0};

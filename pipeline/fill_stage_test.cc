@@ -73,5 +73,30 @@ TEST(FillStage, CancelLeavesTheQueuedKeyframesUnfilledAndCounted) {
       << report.dump(2);
 }
 
+// A keyframe offered with its depth moved to the stamp's instant (as the track stage does where
+// it models the rolling shutter) is filled from the moved depth, and written with the sensor's
+// pixels as measured: every measured pixel as the sensor gave it, fills only in its holes.
+TEST(FillStage, WrittenKeyframesKeepTheMeasuredDepth) {
+  const Capture c = Render(6);
+  InMemoryRunSink sink;
+  FillStage stage(synth::SynthCamera(), {}, &sink);
+  for (size_t i = 0; i < c.frames.size(); ++i) {
+    RgbdFrame placed = c.frames[i];
+    placed.depth = c.frames[i].depth * 1.004;  // moved by a few millimetres
+    EXPECT_TRUE(stage.Offer(placed, c.poses[i], static_cast<int>(i), c.frames[i].depth));
+  }
+  ASSERT_NO_THROW(stage.Finish());
+  ASSERT_EQ(sink.keyframes.size(), c.frames.size());
+  long filled = 0;
+  for (const RgbdFrame& f : c.frames) {
+    const InMemoryRunSink::Keyframe& k = sink.keyframes.at(std::to_string(f.index));
+    const cv::Mat measured = f.hole_mask == 0;
+    EXPECT_EQ(cv::norm(k.fill.filled_depth, f.depth, cv::NORM_INF, measured), 0.0) << f.index;
+    EXPECT_EQ(cv::countNonZero(k.fill.fill_mask & measured), 0) << f.index;
+    filled += cv::countNonZero(k.fill.fill_mask);
+  }
+  EXPECT_GT(filled, 0);
+}
+
 }  // namespace
 }  // namespace gf

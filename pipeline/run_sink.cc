@@ -247,7 +247,7 @@ void InMemoryRunSink::WriteMap(const std::vector<Surfel>& surfels) {
 void InMemoryRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& frame,
                                     const CarriedFillResult& fill) {
   std::lock_guard<std::mutex> lock(mutex_);
-  keyframes[name] = {frame, fill};
+  keyframes[name] = {frame, fill, cv::Mat()};
 }
 
 int InMemoryRunSink::CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) {

@@ -112,15 +112,16 @@ void TrackStage::Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker) 
   record_.restarted += r.status == TrackingStatus::kRestarted;
   if (r.status != TrackingStatus::kTracking && r.status != TrackingStatus::kInitialized)
     spdlog::debug("frame {} ({}): {}", frame.index, frame.timestamp_text, r.BriefReport());
-  // The depth the pose places in the map: moved to the stamp's instant where tracking modelled the
-  // rolling shutter (the sensor's holes stay holes). The fill keeps the frame as measured: its
-  // outputs keep the sensor's pixels as they were, and its stereo comes from the colour images.
+  // The depth the pose places: moved to the stamp's instant where tracking modelled the rolling
+  // shutter (the sensor's holes stay holes). Fusion and the fill use it, so that the fill's
+  // validation and free-space checks agree with the map; the fill's outputs keep the sensor's
+  // pixels as measured.
   RgbdFrame placed = frame;
   if (!r.depth_at_stamp.empty()) {
     placed.depth = r.depth_at_stamp.clone();  // may share its pixels with r.tracked_depth
     if (!frame.hole_mask.empty()) placed.depth.setTo(0.f, frame.hole_mask);
   }
-  if (r.new_keyframe) OfferKeyframe(frame, r, keyframe);
+  if (r.new_keyframe) OfferKeyframe(frame, placed, r, keyframe);
   ++record_.frames;
   if (!r.has_pose()) {
     // Lost frames have no pose: not in the trajectory, not fused.
@@ -137,12 +138,14 @@ void TrackStage::Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker) 
   record_.names.push_back(KeyframeName(frame));
 }
 
-void TrackStage::OfferKeyframe(const RgbdFrame& frame, const TrackingResult& r, int keyframe) {
+void TrackStage::OfferKeyframe(const RgbdFrame& frame, const RgbdFrame& placed,
+                               const TrackingResult& r, int keyframe) {
   if (fill_ && r.has_pose()) {
     if (frame.color.empty())
       throw InputError(frame.depth_path.empty() ? source_.Input() : frame.depth_path,
                        "the stereo fill needs colour images (or --no-fill)");
-    fill_->Offer(frame, r.world_from_camera, keyframe);
+    const bool moved = placed.depth.data != frame.depth.data;
+    fill_->Offer(placed, r.world_from_camera, keyframe, moved ? frame.depth : cv::Mat());
   }
   if (!loop_) return;
   using Link = LoopKeyframeItem::Link;

@@ -90,7 +90,10 @@ class TrackStage {
  private:
   void Run();
   void Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker);
-  void OfferKeyframe(const RgbdFrame& frame, const TrackingResult& r, int keyframe);
+  // frame: as measured; placed: its depth moved to the stamp's instant (the same frame where
+  // tracking did not model the rolling shutter).
+  void OfferKeyframe(const RgbdFrame& frame, const RgbdFrame& placed, const TrackingResult& r,
+                     int keyframe);
   void CheckDepthScale(const RgbdFrame& frame);
 
   const FrameSource& source_;
