@@ -82,14 +82,13 @@ void FillStage::Run() {
   KeyframeFiller filler(camera_, options_.Filler());
   Offered item;
   while (!cancelled_ && queue_.Pop(&item)) {
-    // The filler numbers keyframes as they arrive.
-    if (!item.measured_depth.empty())
-      measured_of_[static_cast<int>(keyframe_of_.size())] = item.measured_depth;
-    keyframe_of_.push_back(item.keyframe);
+    if (!item.measured_depth.empty()) measured_of_[item.frame.index] = item.measured_depth;
+    keyframe_of_.push_back(item.keyframe);  // the filler numbers keyframes as they arrive
     for (const FilledKeyframe& k : filler.Add(item.frame, item.world_from_camera)) Write(k);
   }
   if (!cancelled_)
     for (const FilledKeyframe& k : filler.Flush([&] { return cancelled_.load(); })) Write(k);
+  measured_of_.clear();  // keyframes left unwritten by a cancel
 }
 
 void FillStage::Write(const FilledKeyframe& k) {
@@ -100,23 +99,25 @@ void FillStage::Write(const FilledKeyframe& k) {
   if (k.partner) spdlog::debug("fill {}: {}", r.timestamp, k.stereo.BriefReport());
   if (r.carried_pixels + r.corrected_pixels > 0)
     spdlog::debug("fill {}: {}", r.timestamp, k.fill.BriefReport());
-  const auto measured = measured_of_.find(k.key->id);
+  const auto measured = measured_of_.find(k.key->frame.index);
   if (measured == measured_of_.end()) {
     sink_->WriteKeyframe(r.timestamp, k.key->frame, k.fill);  // a write failure stops the stage
   } else {
     // The sensor's pixels as measured; the fill's where it measured nothing.
+    RgbdFrame frame = k.key->frame;
+    frame.depth = measured->second;
     CarriedFillResult written = k.fill;
     written.filled_depth = k.fill.filled_depth.clone();
     measured->second.copyTo(written.filled_depth, written.fill_mask == 0);
     measured_of_.erase(measured);
-    sink_->WriteKeyframe(r.timestamp, k.key->frame, written);
+    sink_->WriteKeyframe(r.timestamp, frame, written);
   }
   if (fusion_) {
     const int id = k.key->id;
-    fusion_->OfferFill(k, id >= 0 && id < static_cast<int>(keyframe_of_.size()) &&
-                                  keyframe_of_[id] >= 0
-                              ? keyframe_of_[id]
-                              : id);
+    fusion_->OfferFill(
+        k, id >= 0 && id < static_cast<int>(keyframe_of_.size()) && keyframe_of_[id] >= 0
+               ? keyframe_of_[id]
+               : id);
   }
   std::lock_guard<std::mutex> lock(done_mutex_);
   done_.push_back(r);

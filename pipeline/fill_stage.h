@@ -100,7 +100,7 @@ class FillStage {
   FusionStage* fusion_;
   BoundedQueue<Offered> queue_;
   std::vector<int> keyframe_of_;  // the filler's keyframe ids (arrival order) -> the tracker's
-  std::map<int, cv::Mat> measured_of_;  // filler id -> measured depth, until the keyframe is written
+  std::map<int, cv::Mat> measured_of_;  // frame index -> measured depth, until it is written
   mutable std::mutex done_mutex_;
   std::vector<KeyframeFill> done_;  // written by the worker
   std::atomic<int> done_count_{0};

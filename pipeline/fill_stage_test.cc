@@ -75,9 +75,11 @@ TEST(FillStage, CancelLeavesTheQueuedKeyframesUnfilledAndCounted) {
 
 // A keyframe offered with its depth moved to the stamp's instant (as the track stage does where
 // it models the rolling shutter) is filled from the moved depth, and written with the sensor's
-// pixels as measured: every measured pixel as the sensor gave it, fills only in its holes.
+// pixels as measured: every measured pixel as the sensor gave it, fills only in its holes. That
+// holds for a keyframe that fails too (here its features: a one-channel colour image).
 TEST(FillStage, WrittenKeyframesKeepTheMeasuredDepth) {
-  const Capture c = Render(6);
+  Capture c = Render(6);
+  cv::cvtColor(c.frames[2].color, c.frames[2].color, cv::COLOR_BGR2GRAY);
   InMemoryRunSink sink;
   FillStage stage(synth::SynthCamera(), {}, &sink);
   for (size_t i = 0; i < c.frames.size(); ++i) {
@@ -92,6 +94,7 @@ TEST(FillStage, WrittenKeyframesKeepTheMeasuredDepth) {
     const InMemoryRunSink::Keyframe& k = sink.keyframes.at(std::to_string(f.index));
     const cv::Mat measured = f.hole_mask == 0;
     EXPECT_EQ(cv::norm(k.fill.filled_depth, f.depth, cv::NORM_INF, measured), 0.0) << f.index;
+    EXPECT_EQ(cv::norm(k.frame.depth, f.depth, cv::NORM_INF), 0.0) << f.index;
     EXPECT_EQ(cv::countNonZero(k.fill.fill_mask & measured), 0) << f.index;
     filled += cv::countNonZero(k.fill.fill_mask);
   }

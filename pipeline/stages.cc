@@ -144,7 +144,7 @@ void TrackStage::OfferKeyframe(const RgbdFrame& frame, const RgbdFrame& placed,
     if (frame.color.empty())
       throw InputError(frame.depth_path.empty() ? source_.Input() : frame.depth_path,
                        "the stereo fill needs colour images (or --no-fill)");
-    const bool moved = placed.depth.data != frame.depth.data;
+    const bool moved = !r.depth_at_stamp.empty();  // then placed.depth is its own copy
     fill_->Offer(placed, r.world_from_camera, keyframe, moved ? frame.depth : cv::Mat());
   }
   if (!loop_) return;

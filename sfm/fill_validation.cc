@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <opencv2/imgproc.hpp>
 
 #include "acquisition/depth.h"
@@ -145,10 +146,11 @@ bool ValidationOptions::Check(std::string* message) const {
 }
 
 bool PhotometricOptions::Check(std::string* message) const {
-  if (patch_px < 3 || patch_px > 99 || patch_px % 2 == 0 || !(min_ncc > -1) || !(min_patch_std >= 0) ||
-      !(max_mean_difference > 0) || !(occlusion_margin >= 0) || !(corroboration_depth_step > 0) ||
-      !(corroboration_shift_px >= 0)) {
-    if (message) *message = "photometric check: odd patch in 3..99, min_ncc > -1, positive thresholds";
+  if (patch_px < 3 || patch_px > 99 || patch_px % 2 == 0 || !(min_ncc > -1) ||
+      !(min_patch_std >= 0) || !(max_mean_difference > 0) || !(occlusion_margin >= 0) ||
+      !(corroboration_depth_step > 0) || !(corroboration_shift_px >= 0)) {
+    if (message)
+      *message = "photometric check: odd patch in 3..99, min_ncc > -1, positive thresholds";
     return false;
   }
   return true;
