@@ -2,9 +2,11 @@
 
 #include <cmath>
 #include <fstream>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
 #include <sstream>
+#include <tuple>
 #include <utility>
 
 #include "acquisition/errors.h"
@@ -32,9 +34,45 @@ bool Camera::HasDistortion() const {
   return false;
 }
 
+bool Camera::operator==(const Camera& o) const {
+  return width == o.width && height == o.height && fx == o.fx && fy == o.fy && cx == o.cx &&
+         cy == o.cy && distortion == o.distortion;
+}
+
+namespace {
+
+// Values computed from a camera alone, kept for the last few cameras a process met (a run meets
+// one or two), so that per-pair code does not recompute them. Safe to call from any thread.
+template <typename Value>
+class PerCamera {
+ public:
+  template <typename Make>
+  Value Get(const Camera& camera, Make make) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& [c, v] : entries_)
+      if (c == camera) return v;
+    Value v = make();
+    if (entries_.size() == kKept) entries_.erase(entries_.begin());
+    entries_.emplace_back(camera, v);
+    return v;
+  }
+
+ private:
+  static constexpr size_t kKept = 4;
+  std::mutex mutex_;
+  std::vector<std::pair<Camera, Value>> entries_;
+};
+
+}  // namespace
+
 void Camera::UndistortionMaps(cv::Mat* map1, cv::Mat* map2) const {
-  cv::initUndistortRectifyMap(CvK(), CvDistortion(), cv::Mat(), CvK(), cv::Size(width, height),
-                              CV_16SC2, *map1, *map2);
+  static PerCamera<std::pair<cv::Mat, cv::Mat>> cache;
+  std::tie(*map1, *map2) = cache.Get(*this, [&] {
+    std::pair<cv::Mat, cv::Mat> maps;
+    cv::initUndistortRectifyMap(CvK(), CvDistortion(), cv::Mat(), CvK(), cv::Size(width, height),
+                                CV_16SC2, maps.first, maps.second);
+    return maps;
+  });
 }
 
 Eigen::Vector2d Camera::Project(const Eigen::Vector3d& p) const {
@@ -109,12 +147,17 @@ UndistortedPixels::UndistortedPixels(const Camera& camera)
   if (!distorted_) return;
   nodes_x_ = (camera.width - 1 + kStep - 1) / kStep + 1;
   nodes_y_ = (camera.height - 1 + kStep - 1) / kStep + 1;
-  nodes_.resize(static_cast<size_t>(nodes_x_) * nodes_y_);
-  for (int j = 0; j < nodes_y_; ++j)
-    for (int i = 0; i < nodes_x_; ++i) {
-      const Eigen::Vector2d n = camera.UndistortPixel({i * kStep, j * kStep});
-      nodes_[j * nodes_x_ + i] = {camera.fx * n.x() + camera.cx, camera.fy * n.y() + camera.cy};
-    }
+  using Nodes = std::vector<Eigen::Vector2d>;
+  static PerCamera<std::shared_ptr<const Nodes>> cache;
+  nodes_ = cache.Get(camera, [&] {
+    auto nodes = std::make_shared<Nodes>(static_cast<size_t>(nodes_x_) * nodes_y_);
+    for (int j = 0; j < nodes_y_; ++j)
+      for (int i = 0; i < nodes_x_; ++i) {
+        const Eigen::Vector2d n = camera.UndistortPixel({i * kStep, j * kStep});
+        (*nodes)[j * nodes_x_ + i] = {camera.fx * n.x() + camera.cx, camera.fy * n.y() + camera.cy};
+      }
+    return std::shared_ptr<const Nodes>(std::move(nodes));
+  });
 }
 
 namespace {

@@ -28,6 +28,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -77,8 +78,11 @@ struct Camera {
   cv::Mat CvK() const;           // 3x3 CV_64F
   cv::Mat CvDistortion() const;  // 1x5 CV_64F
   // cv::remap maps (fixed point, the fast kind) that undistort this camera's images onto the
-  // ideal pinhole camera K with the same size.
+  // ideal pinhole camera K with the same size. Computed once per camera and shared between calls:
+  // read them, never write into them.
   void UndistortionMaps(cv::Mat* map1, cv::Mat* map2) const;
+  // The same intrinsics, size and distortion.
+  bool operator==(const Camera& other) const;
   // The same camera for an image scaled by `factor` (e.g. 0.5 for a pyramid level).
   Camera Scaled(double factor) const;
 };
@@ -86,7 +90,9 @@ struct Camera {
 // Where each (distorted) pixel of a camera lies in the undistorted pinhole image: exact
 // (Camera::UndistortPixel) on a grid of every 8th pixel, bilinear in between. The distortion field
 // is smooth, so the interpolation is far below a pixel off, at a 64th of the cost of undistorting
-// every pixel. Without distortion, At() is the pixel itself. Immutable after construction.
+// every pixel. Without distortion, At() is the pixel itself. Immutable after construction; the
+// grid is built once per camera and shared by every object made for it (the fill makes several
+// per pair, and the iterative undistortion of ~5,000 nodes takes about a millisecond).
 class UndistortedPixels {
  public:
   explicit UndistortedPixels(const Camera& camera);
@@ -96,7 +102,7 @@ class UndistortedPixels {
     const int i = std::min(x / kStep, nodes_x_ - 2), j = std::min(y / kStep, nodes_y_ - 2);
     const double a = (x - i * kStep) / static_cast<double>(kStep),
                  b = (y - j * kStep) / static_cast<double>(kStep);
-    const Eigen::Vector2d* n = &nodes_[j * nodes_x_ + i];
+    const Eigen::Vector2d* n = &(*nodes_)[j * nodes_x_ + i];
     return (1 - b) * ((1 - a) * n[0] + a * n[1]) +
            b * ((1 - a) * n[nodes_x_] + a * n[nodes_x_ + 1]);
   }
@@ -111,7 +117,7 @@ class UndistortedPixels {
   Camera camera_;
   bool distorted_;
   int nodes_x_ = 0, nodes_y_ = 0;
-  std::vector<Eigen::Vector2d> nodes_;
+  std::shared_ptr<const std::vector<Eigen::Vector2d>> nodes_;
 };
 
 // The order in which a depth sensor exposes its image's lines (camera.json's
