@@ -35,7 +35,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PairSelectionOptions, min_matches, max_evalua
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PlaneSweepOptions, window_px, max_planes, max_step_px, min_ncc,
                                    min_uniqueness, min_parallax_px, min_texture, min_window_inside,
                                    smooth_small, smooth_large, downscale, textureless_cost,
-                                   hole_windows)
+                                   context_px, hole_windows)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SgbmOptions, num_disparities, rectify_alpha, min_valid_fraction,
                                    block_size, uniqueness_ratio, speckle_window, speckle_range,
                                    max_lr_difference_px)

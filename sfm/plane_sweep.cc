@@ -13,17 +13,72 @@
 
 namespace gf {
 
+namespace sweep_detail {
+
+Spans SpansOf(const uint8_t* row, int n, int min_gap) {
+  Spans spans;
+  for (int x = 0; x < n;) {
+    if (!row[x]) {
+      ++x;
+      continue;
+    }
+    int end = x;
+    while (end < n && row[end]) ++end;
+    if (!spans.empty() && x - spans.back().end < min_gap)
+      spans.back().end = end;
+    else
+      spans.push_back({x, end});
+    x = end;
+  }
+  return spans;
+}
+
+ActiveColumns::ActiveColumns(const cv::Mat& active, int half) {
+  const int rows = active.rows, cols = active.cols, blocks = (rows + kBlockRows - 1) / kBlockRows;
+  constexpr int kMinGap = 8;
+  std::vector<uint8_t> in_block(static_cast<size_t>(blocks) * cols, 0);
+  for (int y = 0; y < rows; ++y) {
+    const uint8_t* a = active.ptr<uint8_t>(y);
+    uint8_t* b = &in_block[static_cast<size_t>(y / kBlockRows) * cols];
+    for (int x = 0; x < cols; ++x) b[x] |= a[x] != 0;
+  }
+  for (int i = 0; i < blocks; ++i)
+    block.push_back(SpansOf(&in_block[static_cast<size_t>(i) * cols], cols, kMinGap));
+  std::vector<uint8_t> row(cols), wide(cols);
+  for (int y = 0; y < rows; ++y) {
+    // The blocks whose output rows y - half .. y + half read row y.
+    std::fill(row.begin(), row.end(), 0);
+    const int first = std::max(0, y - half) / kBlockRows,
+              last = std::min(rows - 1, y + half) / kBlockRows;
+    for (int i = first; i <= last; ++i)
+      for (const Span& s : block[i]) std::fill(&row[s.begin], &row[0] + s.end, 1);
+    sums.push_back(SpansOf(row.data(), cols, kMinGap));
+    std::fill(wide.begin(), wide.end(), 0);
+    for (const Span& s : sums.back())
+      std::fill(&wide[std::max(0, s.begin - half)], &wide[0] + std::min(cols, s.end + half), 1);
+    sample.push_back(SpansOf(wide.data(), cols, kMinGap));
+    // Those of the block of output row y - half are Slide's.
+    if (y >= half)
+      for (const Span& s : block[(y - half) / kBlockRows])
+        std::fill(&row[s.begin], &row[0] + s.end, 0);
+    carried.push_back(SpansOf(row.data(), cols, 1));
+  }
+}
+
+}  // namespace sweep_detail
+
 bool PlaneSweepOptions::Check(std::string* message) const {
   if (window_px < 3 || window_px % 2 == 0 || max_planes < 3 || max_planes > 250 ||
       !(max_step_px > 0) || !(min_ncc > -1 && min_ncc < 1) ||
       !(min_uniqueness >= 0 && min_uniqueness < 1) || !(min_parallax_px >= 0) ||
       !(min_texture >= 0) || !(min_window_inside > 0 && min_window_inside <= 1) ||
       smooth_small < 0 || smooth_large < smooth_small || smooth_large > 1000 ||
-      textureless_cost < 0 || textureless_cost > 200 || downscale < 1 || downscale > 4) {
+      textureless_cost < 0 || textureless_cost > 200 || downscale < 1 || downscale > 4 ||
+      context_px < 0) {
     if (message)
       *message =
           "plane sweep: odd window >= 3, 3..250 planes, thresholds in range, 0 <= smooth_small <= "
-          "smooth_large <= 1000, textureless_cost in [0, 200], downscale 1..4";
+          "smooth_large <= 1000, textureless_cost in [0, 200], downscale 1..4, context_px >= 0";
     return false;
   }
   return true;
@@ -39,6 +94,7 @@ std::string PlaneSweepResult::BriefReport() const {
 namespace {
 
 using sweep_detail::AccumulateCorrelation;
+using sweep_detail::ActiveColumns;
 using sweep_detail::AggregatePass;
 using sweep_detail::CostRow;
 using sweep_detail::FirstMinimum;
@@ -46,6 +102,7 @@ using sweep_detail::GrayFloat;
 using sweep_detail::KeyframeRow;
 using sweep_detail::kUncovered;
 using sweep_detail::Minimum;
+using sweep_detail::Span;
 using sweep_detail::ViewData;
 using sweep_detail::WindowSums;
 
@@ -166,9 +223,21 @@ void KeyframeWindows(const PlaneSweepOptions& options, SweepWork* w) {
   var_hole.copyTo(w->var_i, selected);
 }
 
+// The roi pixels within context_px of the region (all of them when that reaches past the roi).
+cv::Mat ActivePixels(const SweepWork& w, const PlaneSweepOptions& options) {
+  const int reach = (options.context_px + options.downscale - 1) / options.downscale;
+  if (reach >= std::max(w.roi.width, w.roi.height))
+    return cv::Mat(w.roi.size(), CV_8UC1, cv::Scalar(1));
+  cv::Mat active;
+  cv::dilate(w.region(w.roi), active,
+             cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * reach + 1, 2 * reach + 1)));
+  return active;
+}
+
 // The matching cost of every plane at every roi pixel, pixel-major (cost[p * planes + d]):
 // 100 * (1 - mean NCC over the views that see it) in [0, 200], textureless_cost where keyframe
-// 1's window is flat or no view sees it (neutral: aggregation then carries the neighbours').
+// 1's window is flat or no view sees it (neutral: aggregation then carries the neighbours'), and
+// at the pixels beyond context_px of the region.
 std::unique_ptr<uint8_t[]> CostVolume(const SweepWork& w, int planes, double w_far, double dw,
                                       const PlaneSweepOptions& options) {
   const int rows = w.roi.height, cols = w.roi.width;
@@ -185,6 +254,10 @@ std::unique_ptr<uint8_t[]> CostVolume(const SweepWork& w, int planes, double w_f
   const float min_var = static_cast<float>(options.min_texture * options.min_texture);
   const float min_inside = static_cast<float>(options.min_window_inside);
   const float neutral = static_cast<float>(options.textureless_cost);
+  // CostRow's value where no view sees a pixel, as a cost byte.
+  const uint8_t neutral_byte =
+      static_cast<uint8_t>(std::clamp(static_cast<int>(neutral + 0.5f), 0, 200));
+  const ActiveColumns active(ActivePixels(w, options), options.window_px / 2);
   cv::Mat inv_n(rows, cols, CV_32F);  // inv_area / keyframe 1's window coverage, once
   for (int y = 0; y < rows; ++y)
     for (int x = 0; x < cols; ++x) inv_n.at<float>(y, x) = inv_area / w.n1.at<float>(y, x);
@@ -199,22 +272,27 @@ std::unique_ptr<uint8_t[]> CostVolume(const SweepWork& w, int planes, double w_f
       Eigen::Matrix3d h = v.rotation;
       h.col(2) += v.translation * inverse_depth;  // R + t n^T / z with n = (0, 0, 1)
       // Correlation over keyframe 1's covered pixels of each window.
-      window_sums.Run(
-          v, w.k * h * w.k_inv * shift, w.i_roi, w.c_roi, w.h_roi, [&](int y, const float* m) {
-            const KeyframeRow k{w.n1.ptr<float>(y), inv_n.ptr<float>(y), w.mean_i.ptr<float>(y),
-                                w.var_i.ptr<float>(y),
-                                hole_windows ? w.use_hole.ptr<float>(y) : nullptr};
-            AccumulateCorrelation(m, k, cols, inv_area, min_inside, min_var, first,
-                                  sum.ptr<float>(y), count.ptr<float>(y), seen.ptr<float>(y));
-          });
+      window_sums.Run(v, w.k * h * w.k_inv * shift, w.i_roi, w.c_roi, w.h_roi, active,
+                      [&](int y, const float* m, const sweep_detail::Spans& spans) {
+                        const KeyframeRow k{w.n1.ptr<float>(y), inv_n.ptr<float>(y),
+                                            w.mean_i.ptr<float>(y), w.var_i.ptr<float>(y),
+                                            hole_windows ? w.use_hole.ptr<float>(y) : nullptr};
+                        for (const Span& s : spans)
+                          AccumulateCorrelation(m, k, cols, s.begin, s.end, inv_area, min_inside,
+                                                min_var, first, sum.ptr<float>(y),
+                                                count.ptr<float>(y), seen.ptr<float>(y));
+                      });
     }
     uint8_t* plane_cost = &block[static_cast<size_t>(plane % kBlock) * pixels];
     for (int y = 0; y < rows; ++y) {
-      CostRow(sum.ptr<float>(y), count.ptr<float>(y), w.var_i.ptr<float>(y), seen.ptr<float>(y),
-              cols, min_var, neutral, row_cost.data());
       uint8_t* out = plane_cost + static_cast<size_t>(y) * cols;
-      for (int x = 0; x < cols; ++x)
-        out[x] = static_cast<uint8_t>(std::clamp(static_cast<int>(row_cost[x]), 0, 200));
+      std::fill(out, out + cols, neutral_byte);
+      for (const Span& s : active.block[y / ActiveColumns::kBlockRows]) {
+        CostRow(sum.ptr<float>(y), count.ptr<float>(y), w.var_i.ptr<float>(y), seen.ptr<float>(y),
+                s.begin, s.end, min_var, neutral, row_cost.data());
+        for (int x = s.begin; x < s.end; ++x)
+          out[x] = static_cast<uint8_t>(std::clamp(static_cast<int>(row_cost[x]), 0, 200));
+      }
     }
     if (plane % kBlock == kBlock - 1 || plane == planes - 1) {
       const int first = plane - plane % kBlock, n = plane % kBlock + 1;

@@ -33,8 +33,8 @@
 namespace gf {
 
 struct PlaneSweepOptions {
-  int window_px = 7;  // correlation window side, pixels (odd)
-  int max_planes = 80;  // most planes swept (time per pair grows with them)
+  int window_px = 7;               // correlation window side, pixels (odd)
+  int max_planes = 80;             // most planes swept (time per pair grows with them)
   double max_step_px = 1.0;        // the plane spacing moves no pixel by more than this, pixels
   double min_ncc = 0.5;            // textured pixels: mean correlation needed at the chosen plane
   double min_uniqueness = 0.05;    // chosen plane's (aggregated) cost must be this much (relative)
@@ -50,6 +50,11 @@ struct PlaneSweepOptions {
   int smooth_large = 40;
   int downscale = 2;          // sweep on images shrunk by this factor (1: full size)
   int textureless_cost = 30;  // cost of every plane where keyframe 1's window has no texture
+  // How far beyond the wanted pixels and their validation ring matching costs are computed,
+  // pixels of keyframe 1's image (about one correlation window, window_px * downscale): the
+  // evidence that aggregation carries into a wanted pixel comes from within this distance; beyond
+  // it every plane costs textureless_cost, and no time is spent there.
+  int context_px = 16;
   // Windows of hole pixels use hole pixels only (where they fill min_window_inside of the
   // window): a measured surface's texture then cannot carry its depth into the hole next to it
   // (foreground fattening, e.g. a label's depth onto the clear glass below it). Projector-shadow

@@ -112,24 +112,26 @@ struct KeyframeRow {
   const float* use_hole;  // 1 where the pixel's window uses hole pixels only, else 0; null: none
 };
 
-// One row of one view's correlation with keyframe 1 (CorrelationStep per pixel) from the window
-// sums m (4 channels of n values; with k.use_hole, 8: the full windows' then the hole windows'),
-// taking the hole windows' sums where use_hole is 1 (a blend, so that it vectorises).
+// One row of one view's correlation with keyframe 1 (CorrelationStep per pixel) at columns
+// [begin, end) from the window sums m (4 channels of n values; with k.use_hole, 8: the full
+// windows' then the hole windows'), taking the hole windows' sums where use_hole is 1 (a blend, so
+// that it vectorises).
 template <bool kFirst>
-GF_ALWAYS_INLINE void CorrelationRow(const float* m, const KeyframeRow& k, int n, float inv_area,
-                                     float min_inside, float min_var, float* __restrict sum,
-                                     float* __restrict count, float* __restrict seen) {
+GF_ALWAYS_INLINE void CorrelationRow(const float* m, const KeyframeRow& k, int n, int begin,
+                                     int end, float inv_area, float min_inside, float min_var,
+                                     float* __restrict sum, float* __restrict count,
+                                     float* __restrict seen) {
   const float *m_jc = m, *m_jj = m + n, *m_ji = m + 2 * n, *m_c = m + 3 * n;
   const float *inside = k.inside, *inv_n = k.inv_n, *mean = k.mean, *var = k.var;
   if (k.use_hole == nullptr) {
-    for (int x = 0; x < n; ++x)
+    for (int x = begin; x < end; ++x)
       CorrelationStep<kFirst>(m_jc[x], m_jj[x], m_ji[x], m_c[x], inv_area, min_inside, min_var,
                               inside[x], inv_n[x], mean[x], var[x], &sum[x], &count[x], &seen[x]);
     return;
   }
   const float *h_jc = m + 4 * n, *h_jj = m + 5 * n, *h_ji = m + 6 * n, *h_c = m + 7 * n;
   const float* use_hole = k.use_hole;
-  for (int x = 0; x < n; ++x) {
+  for (int x = begin; x < end; ++x) {
     const float a = use_hole[x], b = 1.f - use_hole[x];
     CorrelationStep<kFirst>(a * h_jc[x] + b * m_jc[x], a * h_jj[x] + b * m_jj[x],
                             a * h_ji[x] + b * m_ji[x], a * h_c[x] + b * m_c[x], inv_area,
@@ -141,26 +143,27 @@ GF_ALWAYS_INLINE void CorrelationRow(const float* m, const KeyframeRow& k, int n
 // CorrelationRow for one view: the first view of a plane (first) writes sum, count and seen, the
 // others add to them.
 GF_VECTOR_CLONES inline void AccumulateCorrelation(const float* m, const KeyframeRow& k, int n,
-                                                   float inv_area, float min_inside, float min_var,
-                                                   bool first, float* __restrict sum,
-                                                   float* __restrict count,
+                                                   int begin, int end, float inv_area,
+                                                   float min_inside, float min_var, bool first,
+                                                   float* __restrict sum, float* __restrict count,
                                                    float* __restrict seen) {
   if (first)
-    CorrelationRow<true>(m, k, n, inv_area, min_inside, min_var, sum, count, seen);
+    CorrelationRow<true>(m, k, n, begin, end, inv_area, min_inside, min_var, sum, count, seen);
   else
-    CorrelationRow<false>(m, k, n, inv_area, min_inside, min_var, sum, count, seen);
+    CorrelationRow<false>(m, k, n, begin, end, inv_area, min_inside, min_var, sum, count, seen);
 }
 
-// One row of the cost volume from the correlation sums of all views (sum, count, seen as
-// AccumulateCorrelation leaves them; var_i: keyframe 1's window variance): textureless_cost where
+// Columns [begin, end) of a row of the cost volume from the correlation sums of all views (sum,
+// count, seen as AccumulateCorrelation leaves them; var_i: keyframe 1's window variance):
+// textureless_cost where
 // no view sees the window or keyframe 1's window is flat; 100 where it is textured and flat in
 // every view (no match); else 100 (1 - mean NCC), plus 0.5 (so that truncation rounds). Branch-free
 // (a clamp here would not vectorise: the caller clamps).
 GF_VECTOR_CLONES inline void CostRow(const float* __restrict sum, const float* __restrict count,
                                      const float* __restrict var_i, const float* __restrict seen,
-                                     int n, float min_var, float textureless_cost,
+                                     int begin, int end, float min_var, float textureless_cost,
                                      float* __restrict out) {
-  for (int x = 0; x < n; ++x) {
+  for (int x = begin; x < end; ++x) {
     // No textured view (count 0, so sum 0): 100. (A ternary: std::max would not vectorise.)
     const float views = count[x] < 1.f ? 1.f : count[x];
     const float matched = 100.f * (1.f - sum[x] / views);
@@ -253,13 +256,39 @@ GF_VECTOR_CLONES inline void WeightByHoles(const float* __restrict h, int n, siz
 
 // Running window sums move down a row: sum[i] = sum[i] - leaving[i] + entering[i], then the
 // entering row takes the leaving one's place in the ring (vectorises).
-GF_VECTOR_CLONES inline void Slide(const float* __restrict entering, size_t n,
+GF_VECTOR_CLONES inline void Slide(const float* __restrict entering, int n,
                                    float* __restrict leaving, float* __restrict sum) {
-  for (size_t i = 0; i < n; ++i) {
+  for (int i = 0; i < n; ++i) {
     sum[i] = sum[i] - leaving[i] + entering[i];
     leaving[i] = entering[i];
   }
 }
+
+// Column ranges [begin, end) of a row.
+struct Span {
+  int begin, end;
+};
+using Spans = std::vector<Span>;
+
+// The spans of a row's non-zero bytes (n of them), joining spans less than min_gap apart (one loop
+// over a few unused columns costs less than starting another).
+Spans SpansOf(const uint8_t* row, int n, int min_gap);
+
+// Where the window sums are needed, for an `active` mask (CV_8U, the ROI's size) of the pixels
+// whose costs are wanted: output rows come in blocks of kBlockRows (the running sums restart
+// exactly at each block), and a block's spans cover the columns active in any of its rows; each
+// row's horizontal sums are computed on the columns of every block whose windows reach it, and
+// its samples half a window wider.
+struct ActiveColumns {
+  static constexpr int kBlockRows = 8;
+  std::vector<Spans> block;   // per block of output rows
+  std::vector<Spans> sums;    // per ROI row: columns of its horizontal window sums
+  std::vector<Spans> sample;  // per ROI row: columns sampled
+  // Per ROI row y: the columns of its horizontal sums outside the block of output row y - half
+  // (the row it enters the window of), which Slide does not move into the ring.
+  std::vector<Spans> carried;
+  ActiveColumns(const cv::Mat& active, int half);
+};
 
 // Window sums of one view's warped grey level J for a plane, one output row at a time: J is
 // sampled bilinearly through the plane's homography (key1 pixel -> view pixel), then summed over
@@ -267,7 +296,8 @@ GF_VECTOR_CLONES inline void Slide(const float* __restrict entering, size_t n,
 // J c, J^2 c, J I c and the view's coverage c (c: keyframe 1's coverage, I: its grey level); with
 // a hole weight h (keyframe 1's hole share of c, c being 0 or 1), four more with h in place of c,
 // for windows that use hole pixels only. Rows are summed directly; columns by running sums that
-// are redone directly every kExactEvery rows, so float rounding cannot drift.
+// are redone directly at every block of ActiveColumns::kBlockRows rows, so float rounding cannot
+// drift. Only the columns ActiveColumns names are computed; the others hold stale values.
 class WindowSums {
  public:
   WindowSums(int rows, int cols, int window, bool holes)
@@ -280,61 +310,83 @@ class WindowSums {
         sample_(static_cast<size_t>(channels_) * padded_, 0.f),
         ring_(static_cast<size_t>(window) * channels_ * cols, 0.f),
         entering_(static_cast<size_t>(channels_) * cols),
-        sums_(static_cast<size_t>(channels_) * cols),
+        sums_(static_cast<size_t>(channels_) * cols, 0.f),
         u_(cols),
         v_(cols) {}
 
-  // Runs over the ROI for one view and plane; calls row_done(y, sums) for every output row y,
-  // sums holding the 4 (or 8, with holes) channels of `cols` values each (channel-major).
-  // h_roi: the hole weights, used only when the object was made with holes.
+  // Runs over the ROI for one view and plane; calls row_done(y, sums, spans) for every output
+  // row y, sums holding the 4 (or 8, with holes) channels of `cols` values each (channel-major),
+  // valid in the columns `spans` names. h_roi: the hole weights, used only when the object was
+  // made with holes.
   template <typename RowDone>
   void Run(const ViewData& view, const Eigen::Matrix3d& key1_to_view, const cv::Mat& i_roi,
-           const cv::Mat& c_roi, const cv::Mat& h_roi, RowDone row_done) {
+           const cv::Mat& c_roi, const cv::Mat& h_roi, const ActiveColumns& active,
+           RowDone row_done) {
     std::fill(ring_.begin(), ring_.end(), 0.f);
     float h[9];
     for (int i = 0; i < 9; ++i) h[i] = static_cast<float>(key1_to_view(i / 3, i % 3));
     const bool finite = key1_to_view.allFinite();
     const size_t row_values = static_cast<size_t>(channels_) * cols_;
-    std::fill(sums_.begin(), sums_.end(), 0.f);
+    // Each channel's part of a row of `cols` values, over spans.
+    auto for_spans = [&](const Spans& spans, auto f) {
+      for (int c = 0; c < channels_; ++c)
+        for (const Span& s : spans) f(static_cast<size_t>(c) * cols_ + s.begin, s.end - s.begin);
+    };
     for (int y = 0; y < rows_ + half_; ++y) {
-      // The slot of the row that leaves the window (zero for the first rows).
+      // The slot of the row that leaves the window (zero for the first rows); the entering row
+      // takes its place.
       float* slot = &ring_[static_cast<size_t>(y % window_) * row_values];
       const int out_row = y - half_;
-      const bool exact = out_row % kExactEvery == 0;  // direct sums this row, else running ones
-      // The entering row's horizontal sums: straight into the ring on exact rows; else beside
-      // it, until Slide has subtracted the leaving row.
-      float* entering = exact ? slot : entering_.data();
+      const Spans* spans =
+          out_row >= 0 ? &active.block[out_row / ActiveColumns::kBlockRows] : nullptr;
+      // Direct sums at a block's first row, else running ones. The entering row's horizontal
+      // sums go straight into the ring, except for running sums: beside it, until Slide has
+      // subtracted the leaving row.
+      const bool running = spans && out_row % ActiveColumns::kBlockRows != 0;
+      float* entering = running ? entering_.data() : slot;
       if (y < rows_) {
         SamplePositions(h, finite, y, cols_, u_.data(), v_.data());
         float* jc = &sample_[half_];
-        SampleRow(view, u_.data(), v_.data(), cols_, i_roi.ptr<float>(y), c_roi.ptr<float>(y), jc,
-                  jc + padded_, jc + 2 * padded_, jc + 3 * padded_);
-        if (channels_ == 8) WeightByHoles(h_roi.ptr<float>(y), cols_, padded_, jc);
+        for (const Span& s : active.sample[y]) {
+          const int b = s.begin, n = s.end - s.begin;
+          SampleRow(view, u_.data() + b, v_.data() + b, n, i_roi.ptr<float>(y) + b,
+                    c_roi.ptr<float>(y) + b, jc + b, jc + padded_ + b, jc + 2 * padded_ + b,
+                    jc + 3 * padded_ + b);
+          if (channels_ == 8) WeightByHoles(h_roi.ptr<float>(y) + b, n, padded_, jc + b);
+        }
         for (int c = 0; c < channels_; ++c)
-          SumWindows(&sample_[static_cast<size_t>(c) * padded_], 1, window_, cols_,
-                     entering + static_cast<size_t>(c) * cols_);
+          for (const Span& s : active.sums[y])
+            SumWindows(&sample_[static_cast<size_t>(c) * padded_ + s.begin], 1, window_,
+                       s.end - s.begin, entering + static_cast<size_t>(c) * cols_ + s.begin);
       } else {
         std::fill(entering, entering + row_values, 0.f);
       }
+      if (!spans) continue;
       // The ring holds rows out_row - half .. out_row + half (in rotated order).
-      if (exact)
-        SumWindows(ring_.data(), row_values, window_, static_cast<int>(row_values), sums_.data());
-      else
-        Slide(entering, row_values, slot, sums_.data());
-      if (out_row < 0) continue;
-      row_done(out_row, sums_.data());
+      if (!running) {
+        for_spans(*spans, [&](size_t at, int n) {
+          SumWindows(ring_.data() + at, row_values, window_, n, &sums_[at]);
+        });
+      } else {
+        for_spans(*spans,
+                  [&](size_t at, int n) { Slide(entering + at, n, slot + at, &sums_[at]); });
+        if (y < rows_)
+          for_spans(active.carried[y], [&](size_t at, int n) {
+            std::copy(entering + at, entering + at + n, slot + at);
+          });
+        else
+          std::fill(slot, slot + row_values, 0.f);
+      }
+      row_done(out_row, sums_.data(), *spans);
     }
   }
 
  private:
-  // Vertical sums run (add the row that enters, subtract the one that leaves) and are summed
-  // directly every kExactEvery-th row, which bounds float drift to a few roundings.
-  static constexpr int kExactEvery = 8;
   int rows_, cols_, window_, half_, channels_;
   size_t padded_;
   std::vector<float> sample_;    // the channels of one ROI row, padded by half a window each side
   std::vector<float> ring_;      // the last `window` rows' horizontal sums, all channels
-  std::vector<float> entering_;  // the entering row's horizontal sums (rows summed by Slide)
+  std::vector<float> entering_;  // the entering row's horizontal sums (running sums)
   std::vector<float> sums_, u_, v_;
 };
 

@@ -90,6 +90,95 @@ TEST(AggregatePass, TwoPassesGiveTheEightPaths) {
   EXPECT_EQ(sum, AggregateByPath(cost, rows, cols, planes, 4, 40));
 }
 
+// Every output row's sums of one WindowSums run, channel-major, with the spans they were valid in.
+struct RunSums {
+  std::vector<std::vector<float>> rows;
+  std::vector<Spans> spans;
+};
+RunSums RunWindowSums(const ViewData& view, const Eigen::Matrix3d& h, const cv::Mat& i_roi,
+                      const cv::Mat& c_roi, const cv::Mat& h_roi, const cv::Mat& active,
+                      int window) {
+  WindowSums sums(i_roi.rows, i_roi.cols, window, true);
+  RunSums out;
+  out.rows.resize(i_roi.rows);
+  out.spans.resize(i_roi.rows);
+  sums.Run(view, h, i_roi, c_roi, h_roi, ActiveColumns(active, window / 2),
+           [&](int y, const float* m, const Spans& spans) {
+             out.rows[y].assign(m, m + 8 * i_roi.cols);
+             out.spans[y] = spans;
+           });
+  return out;
+}
+
+// Window sums computed on part of the image equal those of the whole image where they are
+// computed (bit for bit: the same operations in the same order), and both equal the window sums'
+// definition (a box sum of the sampled channels, up to float rounding).
+TEST(WindowSums, PartsOfTheImageGiveTheWholeImagesSums) {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<float> grey(0.f, 255.f), unit(0.f, 1.f);
+  const int rows = 37, cols = 53, window = 7, half = 3;
+  ViewData view;
+  view.gray = cv::Mat(rows + 6, cols + 6, CV_32F);
+  for (int y = 0; y < view.gray.rows; ++y)
+    for (int x = 0; x < view.gray.cols; ++x) view.gray.at<float>(y, x) = grey(random);
+  cv::Mat i_roi(rows, cols, CV_32F), c_roi(rows, cols, CV_32F), h_roi(rows, cols, CV_32F);
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < cols; ++x) {
+      i_roi.at<float>(y, x) = grey(random);
+      c_roi.at<float>(y, x) = unit(random) < 0.9f ? 1.f : 0.f;
+      h_roi.at<float>(y, x) = c_roi.at<float>(y, x) * (unit(random) < 0.5f ? 1.f : 0.f);
+    }
+  Eigen::Matrix3d h;  // a slight warp, some samples outside the view's image
+  h << 1.02, 0.01, 2.3, -0.015, 0.99, 3.7, 1e-4, -2e-4, 1.0;
+  const RunSums whole = RunWindowSums(view, h, i_roi, c_roi, h_roi,
+                                      cv::Mat(rows, cols, CV_8UC1, cv::Scalar(1)), window);
+  cv::Mat active(rows, cols, CV_8UC1, cv::Scalar(0));
+  active(cv::Rect(2, 3, 5, 4)).setTo(1);
+  active(cv::Rect(30, 12, 20, 3)).setTo(1);
+  active(cv::Rect(10, 30, 2, 7)).setTo(1);
+  const RunSums part = RunWindowSums(view, h, i_roi, c_roi, h_roi, active, window);
+  // The sampled channels, as SampleRow and WeightByHoles give them (0 outside the ROI).
+  std::vector<cv::Mat> channel(8);
+  for (cv::Mat& c : channel) c = cv::Mat(rows + 2 * half, cols + 2 * half, CV_32F, cv::Scalar(0));
+  std::vector<float> u(cols), v(cols), row(4 * cols);
+  float hf[9];
+  for (int i = 0; i < 9; ++i) hf[i] = static_cast<float>(h(i / 3, i % 3));
+  for (int y = 0; y < rows; ++y) {
+    SamplePositions(hf, true, y, cols, u.data(), v.data());
+    SampleRow(view, u.data(), v.data(), cols, i_roi.ptr<float>(y), c_roi.ptr<float>(y), &row[0],
+              &row[cols], &row[2 * cols], &row[3 * cols]);
+    for (int c = 0; c < 4; ++c)
+      for (int x = 0; x < cols; ++x) {
+        channel[c].at<float>(y + half, x + half) = row[c * cols + x];
+        channel[c + 4].at<float>(y + half, x + half) = row[c * cols + x] * h_roi.at<float>(y, x);
+      }
+  }
+  int compared = 0;
+  for (int y = 0; y < rows; ++y) {
+    ASSERT_EQ(whole.spans[y].size(), 1u);
+    for (int c = 0; c < 8; ++c)
+      for (int x = 0; x < cols; ++x) {
+        const double box = cv::sum(channel[c](cv::Rect(x, y, window, window)))[0];
+        EXPECT_NEAR(whole.rows[y][c * cols + x], box, 1e-3 * (1 + std::abs(box)))
+            << c << " " << x << " " << y;
+      }
+    for (const Span& s : part.spans[y])
+      for (int x = s.begin; x < s.end; ++x, ++compared)
+        for (int c = 0; c < 8; ++c)
+          ASSERT_EQ(part.rows[y][c * cols + x], whole.rows[y][c * cols + x])
+              << c << " " << x << " " << y;
+  }
+  // Every active pixel was computed, and far from all of the image.
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < cols; ++x)
+      if (active.at<uint8_t>(y, x))
+        EXPECT_TRUE(std::any_of(part.spans[y].begin(), part.spans[y].end(),
+                                [&](const Span& s) { return s.begin <= x && x < s.end; }))
+            << x << " " << y;
+  EXPECT_GT(compared, 100);
+  EXPECT_LT(compared, rows * cols / 2);
+}
+
 TEST(FirstMinimum, FindsTheFirstOfEqualMinima) {
   const std::vector<uint16_t> t = {9, 4, 7, 4, 4, 8};
   EXPECT_EQ(FirstMinimum(t.data(), 6), 1);
