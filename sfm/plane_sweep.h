@@ -53,7 +53,7 @@ struct PlaneSweepOptions {
   // How far beyond the wanted pixels and their validation ring matching costs are computed,
   // pixels of keyframe 1's image (about one correlation window, window_px * downscale): the
   // evidence that aggregation carries into a wanted pixel comes from within this distance; beyond
-  // it every plane costs textureless_cost, and no time is spent there.
+  // it every plane costs textureless_cost without matching (aggregation still crosses it).
   int context_px = 16;
   // Windows of hole pixels use hole pixels only (where they fill min_window_inside of the
   // window): a measured surface's texture then cannot carry its depth into the hole next to it
