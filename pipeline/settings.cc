@@ -36,9 +36,9 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PlaneSweepOptions, window_px, max_planes, max
                                    min_uniqueness, min_parallax_px, min_texture, min_window_inside,
                                    smooth_small, smooth_large, downscale, textureless_cost,
                                    context_px, hole_windows)
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SgbmOptions, num_disparities, rectify_alpha, min_valid_fraction,
-                                   block_size, uniqueness_ratio, speckle_window, speckle_range,
-                                   max_lr_difference_px)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SgbmOptions, num_disparities, rectify_alpha, max_zoom,
+                                   min_valid_fraction, block_size, uniqueness_ratio,
+                                   speckle_window, speckle_range, max_lr_difference_px)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(DepthStepOptions, jump, far_side_px, near_side_px)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SeeThroughOptions, ratio, rim_px, near_side_px)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ValidationOptions, min_depth_m, max_depth_m, ring_px,

@@ -34,15 +34,19 @@ double Rectify(const Camera& camera, const SE3& second_from_first, double alpha,
   return out->vertical ? out->p_right.at<double>(1, 3) : out->p_right.at<double>(0, 3);
 }
 
-// Scales a rectified projection's focal length by `s` about the image centre (the view direction
-// there is kept), and the baseline term with it.
-void ScaleProjection(double s, const Camera& camera, cv::Mat* p) {
-  const double centre[2] = {0.5 * (camera.width - 1), 0.5 * (camera.height - 1)};
+// Scales a rectified projection's focal length by `s` about the pixel `fixed` (the view direction
+// there stays at that pixel), and the baseline term with it.
+void ScaleProjection(double s, const Eigen::Vector2d& fixed, const Eigen::Vector2d& fixed_after,
+                     cv::Mat* p) {
   for (int row = 0; row < 2; ++row) {
     p->at<double>(row, row) *= s;
-    p->at<double>(row, 2) = centre[row] + s * (p->at<double>(row, 2) - centre[row]);
+    p->at<double>(row, 2) = fixed_after[row] + s * (p->at<double>(row, 2) - fixed[row]);
     p->at<double>(row, 3) *= s;
   }
+}
+
+Eigen::Vector2d Centre(const cv::Size& size) {
+  return {0.5 * (size.width - 1), 0.5 * (size.height - 1)};
 }
 
 // The largest squared radius, in undistorted normalised coordinates, of the camera's image
@@ -67,13 +71,13 @@ double FieldOfViewRadius2(const Camera& camera) {
 
 // Which pixels of the (untransposed) rectified image, sampled every `step` pixels, show the scene:
 // their ray is in front of the camera, inside its field of view and lands in its image.
-cv::Mat ValidGrid(const Camera& camera, const cv::Mat& r, const cv::Mat& p, int step,
-                  double fov_r2) {
+cv::Mat ValidGrid(const Camera& camera, const cv::Mat& r, const cv::Mat& p, const cv::Size& size,
+                  int step, double fov_r2) {
   Eigen::Matrix3d cam_from_rect;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) cam_from_rect(i, j) = r.at<double>(j, i);
   const double f = p.at<double>(0, 0), cx = p.at<double>(0, 2), cy = p.at<double>(1, 2);
-  cv::Mat grid((camera.height + step - 1) / step, (camera.width + step - 1) / step, CV_8UC1);
+  cv::Mat grid((size.height + step - 1) / step, (size.width + step - 1) / step, CV_8UC1);
   for (int j = 0; j < grid.rows; ++j)
     for (int i = 0; i < grid.cols; ++i) {
       const Eigen::Vector3d ray =
@@ -96,6 +100,7 @@ bool SgbmOptions::Check(std::string* message) const {
     return fail("num_disparities: positive multiple of 16");
   if (block_size < 1 || block_size % 2 == 0) return fail("block_size must be odd");
   if (!(rectify_alpha >= -1 && rectify_alpha <= 1)) return fail("rectify_alpha must be in [-1, 1]");
+  if (!(max_zoom == 0 || max_zoom >= 0.25)) return fail("max_zoom: 0 (none) or at least 0.25");
   if (!(min_valid_fraction >= 0 && min_valid_fraction <= 1))
     return fail("min_valid_fraction must be in [0, 1]");
   if (!(max_lr_difference_px >= 0) || uniqueness_ratio < 0 || speckle_window < 0 ||
@@ -122,8 +127,9 @@ SgbmRectification RectifyForSgbm(const Camera& camera, const SE3& key1_from_key2
     r.swapped = true;
     shift = Rectify(camera, key1_from_key2, options.rectify_alpha, &r);
   }
-  const int width = r.vertical ? camera.height : camera.width;
-  const int height = r.vertical ? camera.width : camera.height;
+  r.size = cv::Size(camera.width, camera.height);
+  int width = r.vertical ? camera.height : camera.width;
+  int height = r.vertical ? camera.width : camera.height;
   // The search covers the depth range (a pixel's depth in the rectified camera differs from
   // keyframe 1's by the rectifying rotation; the caller's range has a margin for that).
   auto search = [&](double fb) {
@@ -150,14 +156,32 @@ SgbmRectification RectifyForSgbm(const Camera& camera, const SE3& key1_from_key2
   }
   if (scale < 1.0) {
     r.rescaled = true;
-    ScaleProjection(scale, camera, &r.p_left);
-    ScaleProjection(scale, camera, &r.p_right);
+    ScaleProjection(scale, Centre(r.size), Centre(r.size), &r.p_left);
+    ScaleProjection(scale, Centre(r.size), Centre(r.size), &r.p_right);
   }
   r.fb = scale * fb;
+  // Magnified past max_zoom, the same field of view goes onto a smaller image (a smaller search),
+  // unless the search's rounding to 16 disparities does not fit that image.
+  const double zoom = r.p_left.at<double>(0, 0) / camera.fx;
+  if (options.max_zoom > 0 && zoom > options.max_zoom) {
+    SgbmRectification full = r;  // the projections are scaled in place: keep copies
+    full.p_left = r.p_left.clone();
+    full.p_right = r.p_right.clone();
+    const double s = options.max_zoom / zoom;
+    r.size = cv::Size(static_cast<int>(std::lround(s * camera.width)),
+                      static_cast<int>(std::lround(s * camera.height)));
+    const Eigen::Vector2d corner(-0.5, -0.5);  // the images' outer edges stay the views' edges
+    ScaleProjection(s, corner, corner, &r.p_left);
+    ScaleProjection(s, corner, corner, &r.p_right);
+    r.fb *= s;
+    width = r.vertical ? r.size.height : r.size.width;
+    height = r.vertical ? r.size.width : r.size.height;
+    if (!search(r.fb)) r = full;
+  }
   r.zoom = r.p_left.at<double>(0, 0) / camera.fx;
   const double fov_r2 = FieldOfViewRadius2(camera);
-  const cv::Mat valid = ValidGrid(camera, r.r_left, r.p_left, 8, fov_r2) &
-                        ValidGrid(camera, r.r_right, r.p_right, 8, fov_r2);
+  const cv::Mat valid = ValidGrid(camera, r.r_left, r.p_left, r.size, 8, fov_r2) &
+                        ValidGrid(camera, r.r_right, r.p_right, r.size, 8, fov_r2);
   r.valid_fraction = static_cast<double>(cv::countNonZero(valid)) / valid.total();
   if (r.valid_fraction < options.min_valid_fraction) {
     std::snprintf(text, sizeof(text), "the rectified views share %.0f%% of the image (min %.0f%%)",
@@ -173,10 +197,11 @@ SgbmRectification RectifyForSgbm(const Camera& camera, const SE3& key1_from_key2
 std::string SgbmRectification::BriefReport() const {
   char buffer[300];
   std::snprintf(buffer, sizeof(buffer),
-                "%s%s rectification: zoom %.2f%s, valid %.0f%%, f*b %.1f px m, disparities "
-                "%d+%d%s%s",
+                "%s%s rectification: zoom %.2f%s on %dx%d, valid %.0f%%, f*b %.1f px m, "
+                "disparities %d+%d%s%s",
                 vertical ? "vertical" : "horizontal", swapped ? " swapped" : "", zoom,
-                rescaled ? " (reduced to fit the search)" : "", 100 * valid_fraction, fb,
+                rescaled ? " (reduced to fit the search)" : "", size.width, size.height,
+                100 * valid_fraction, fb,
                 min_disparity, num_disparities, usable ? "" : ": refused, ", problem.c_str());
   return buffer;
 }
@@ -184,7 +209,7 @@ std::string SgbmRectification::BriefReport() const {
 RectifiedImages RectifyImages(const SgbmRectification& rect, const RgbdFrame& key1,
                               const RgbdFrame& key2, const Camera& camera) {
   GF_CHECK(!rect.r_left.empty(), "the pair was not rectified");
-  const cv::Size size(camera.width, camera.height);
+  const cv::Size size = rect.size;
   const double fov_r2 = FieldOfViewRadius2(camera);
   auto remap = [&](const cv::Mat& color, const cv::Mat& r, const cv::Mat& p, cv::Mat* gray_rect,
                    cv::Mat* valid) {
@@ -194,7 +219,8 @@ RectifiedImages RectifyImages(const SgbmRectification& rect, const RgbdFrame& ke
     cv::cvtColor(color, gray, cv::COLOR_BGR2GRAY);
     cv::remap(gray, *gray_rect, map, map_fraction, cv::INTER_LINEAR);
     const int step = 4;
-    cv::resize(ValidGrid(camera, r, p, step, fov_r2), *valid, {}, step, step, cv::INTER_NEAREST);
+    cv::resize(ValidGrid(camera, r, p, size, step, fov_r2), *valid, {}, step, step,
+               cv::INTER_NEAREST);
     *valid = (*valid)(cv::Rect(0, 0, size.width, size.height)).clone();
     if (rect.vertical) {  // make epipolar lines horizontal
       // Two destinations: one reused for both would share its buffer with *gray_rect after the

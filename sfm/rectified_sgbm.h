@@ -3,10 +3,12 @@
 //
 // RectifyForSgbm rectifies the pair (cv::stereoRectify, the pair's left camera first; a mostly
 // vertical baseline is transposed into a horizontal one) and sizes the disparity search for the
-// depth range keyframe 1 measures. The crop of cv::stereoRectify (alpha 0) magnifies the images,
-// which sharpens disparities but multiplies them too; a pair whose baseline leans along the
-// optical axis, or a mostly vertical one through TUM's lens distortion, was magnified 41 times
-// (OpenCV then asked for 2843 disparities on a 480-pixel-wide image). Where the magnified search
+// depth range keyframe 1 measures. The crop of cv::stereoRectify (alpha 0) magnifies the images
+// (1.2-2.2 times on TUM's sideways pairs), which multiplies the pixels and disparities to search
+// without adding detail: a crop magnified past max_zoom keeps its field of view on a smaller
+// image. A pair whose baseline leans along the optical axis, or a mostly vertical one through
+// TUM's lens distortion, was magnified 41 times (OpenCV then asked for 2843 disparities on a
+// 480-pixel-wide image). Where the magnified search
 // does not fit, the rectified focal length is reduced, about the image centre, until it does.
 // The pair is refused (and goes to the plane sweep) when the rectified views then keep too little
 // of the images (min_valid_fraction) or no focal length fits. SGBM is never called with
@@ -35,6 +37,11 @@ struct SgbmOptions {
                                // itself follows keyframe 1's depth range
   double rectify_alpha = 0.0;  // cv::stereoRectify alpha: 0 crops to valid pixels (magnifies),
                                // 1 keeps all, -1 keeps the camera's focal length
+  // Most magnification of the rectified images against the camera's own pixels (rectified focal
+  // length / fx). A crop magnified more keeps its field of view on a smaller image: magnifying
+  // past the camera's pixels adds no detail, only pixels and disparities to search (SGBM's time
+  // grows with the magnification's cube). 0: the crop's own magnification, whatever it is.
+  double max_zoom = 1.0;
   // Share of the rectified image that must show the scene in both views (inside the images and
   // the lens's field of view) for SGBM to run; below it the plane sweep fills the pair.
   double min_valid_fraction = 0.25;
@@ -55,6 +62,7 @@ struct SgbmRectification {
   bool vertical = false;      // epipolar lines run vertically: the images are transposed for SGBM
   bool rescaled = false;      // the crop's focal length was reduced so that the search fits
   double zoom = 0;            // rectified focal length / the camera's fx
+  cv::Size size;              // rectified image (untransposed): the camera's, or smaller (max_zoom)
   double valid_fraction = 0;  // share of the rectified image that shows the scene in both views
   double fb = 0;              // rectified focal length * baseline: disparity = fb / depth
   int min_disparity = 0, num_disparities = 0;  // the SGBM search, pixels

@@ -41,6 +41,51 @@ TEST(RectifyForSgbm, AMostlyVerticalBaselineThroughTumsLensGetsASearchThatFits) 
   EXPECT_GE(r.min_disparity + r.num_disparities, r.fb / 0.6);
 }
 
+// A sideways pair through TUM's lens, turned 6 degrees: cv::stereoRectify's crop magnifies it.
+// Limited to max_zoom, the same field of view lands on a smaller image: the images' corners look
+// along the same rays, and the search shrinks with the magnification.
+TEST(RectifyForSgbm, AMagnifiedCropKeepsItsFieldOfViewOnASmallerImage) {
+  const Camera camera = testing::TumFr1Camera();
+  const SE3 key1_from_key2(
+      Eigen::AngleAxisd(6 * M_PI / 180, Eigen::Vector3d(0.2, 1, 0.1).normalized())
+          .toRotationMatrix(),
+      Eigen::Vector3d(-0.08, 0.01, 0.01));
+  SgbmOptions unlimited;
+  unlimited.max_zoom = 0;
+  const SgbmRectification crop = RectifyForSgbm(camera, key1_from_key2, 0.6, 3.6, unlimited);
+  SgbmOptions limited;
+  limited.max_zoom = 1.0;
+  const SgbmRectification r = RectifyForSgbm(camera, key1_from_key2, 0.6, 3.6, limited);
+  SCOPED_TRACE(crop.BriefReport() + " / " + r.BriefReport());
+  ASSERT_TRUE(crop.usable && r.usable);
+  ASSERT_GT(crop.zoom, 1.1);  // the case this test is about
+  EXPECT_EQ(crop.size, cv::Size(camera.width, camera.height));
+  EXPECT_NEAR(r.zoom, 1.0, 0.01);
+  EXPECT_NEAR(r.size.width, camera.width / crop.zoom, 1.0);
+  EXPECT_NEAR(r.size.height, camera.height / crop.zoom, 1.0);
+  // The rays through the images' outer corners, in the rectified camera.
+  auto ray = [](const SgbmRectification& x, double u, double v) {
+    const cv::Mat& p = x.p_left;
+    return Eigen::Vector3d((u - p.at<double>(0, 2)) / p.at<double>(0, 0),
+                           (v - p.at<double>(1, 2)) / p.at<double>(1, 1), 1.0);
+  };
+  for (const double fu : {0.0, 1.0})
+    for (const double fv : {0.0, 1.0}) {
+      const Eigen::Vector3d a = ray(crop, fu * camera.width - 0.5, fv * camera.height - 0.5);
+      const Eigen::Vector3d b = ray(r, fu * r.size.width - 0.5, fv * r.size.height - 0.5);
+      EXPECT_LT((a - b).norm(), 2.0 / camera.fx) << fu << " " << fv;  // within two pixels
+    }
+  EXPECT_NEAR(r.fb, crop.fb / crop.zoom, 1e-6 * crop.fb);
+  EXPECT_LT(r.min_disparity + r.num_disparities, crop.min_disparity + crop.num_disparities);
+  EXPECT_NEAR(r.valid_fraction, crop.valid_fraction, 0.05);
+  // The rectified images come out at that size.
+  RgbdFrame key;
+  key.color = cv::Mat(camera.height, camera.width, CV_8UC3, cv::Scalar(90, 120, 150));
+  const RectifiedImages images = RectifyImages(r, key, key, camera);
+  EXPECT_EQ(images.left.size(), r.size);
+  EXPECT_EQ(images.valid_right.size(), r.size);
+}
+
 TEST(RectifyForSgbm, RefusesPairsSgbmCannotServe) {
   // A tiny image cannot hold the disparities of a long baseline at close range.
   Camera tiny;
@@ -118,6 +163,17 @@ TEST(FillHolesByStereo, FillsAMostlyVerticalPair) {
   ASSERT_TRUE(both.success);
   EXPECT_GT(both.filled_pixels, both.hole_pixels / 4);
   EXPECT_GT(good_share(both), 0.8);
+  // SGBM on images no more magnified than the camera's own pixels fills about as much, as well.
+  StereoFillOptions camera_pixels = sgbm_only;
+  camera_pixels.sgbm.max_zoom = 1.0;
+  const StereoFillResult small =
+      FillHolesByStereo(key1, key2, camera, key1_from_key2, camera_pixels);
+  SCOPED_TRACE(small.BriefReport() + "; " + small.rectification.BriefReport());
+  ASSERT_TRUE(small.success);
+  EXPECT_LE(small.rectification.zoom, 1.0 + 1e-9);
+  EXPECT_LT(small.rectification.size.area(), camera.width * camera.height);
+  EXPECT_GT(small.filled_pixels, 0.8 * sgbm.filled_pixels);
+  EXPECT_GT(good_share(small), 0.8);
 }
 
 // A textured frame of the given size: noise blurred into blobs, depth a tilted plane at 0.8-3 m
