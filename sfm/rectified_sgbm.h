@@ -8,13 +8,12 @@
 // without adding detail: a crop magnified past max_zoom keeps its field of view on a smaller
 // image. A pair whose baseline leans along the optical axis, or a mostly vertical one through
 // TUM's lens distortion, was magnified 41 times (OpenCV then asked for 2843 disparities on a
-// 480-pixel-wide image). Where the magnified search
-// does not fit, the rectified focal length is reduced, about the image centre, until it does.
-// The pair is refused (and goes to the plane sweep) when the rectified views then keep too little
-// of the images (min_valid_fraction) or no focal length fits. SGBM is never called with
-// parameters OpenCV 4.6 cannot survive: minDisparity + numDisparities at or above the image width
-// throws, segfaults or allocates a negative size inside StereoSGBM, past any catch
-// (SgbmParametersFit).
+// 480-pixel-wide image). Where the magnified search does not fit, the rectified focal length is
+// first reduced, about the image centre, until it does. The pair is refused (and goes to the
+// plane sweep) when the rectified views then keep too little of the images (min_valid_fraction)
+// or no focal length fits. SGBM is never called with parameters OpenCV 4.6 cannot survive:
+// minDisparity + numDisparities at or above the image width throws, segfaults or allocates a
+// negative size inside StereoSGBM, past any catch (SgbmParametersFit).
 //
 // No threads, no I/O. Usage:
 //   gf::SgbmRectification rect = gf::RectifyForSgbm(camera, key1_from_key2, 0.6, 3.6, {});
