@@ -155,10 +155,9 @@ GF_VECTOR_CLONES inline void AccumulateCorrelation(const float* m, const Keyfram
 
 // Columns [begin, end) of a row of the cost volume from the correlation sums of all views (sum,
 // count, seen as AccumulateCorrelation leaves them; var_i: keyframe 1's window variance):
-// textureless_cost where
-// no view sees the window or keyframe 1's window is flat; 100 where it is textured and flat in
-// every view (no match); else 100 (1 - mean NCC), plus 0.5 (so that truncation rounds). Branch-free
-// (a clamp here would not vectorise: the caller clamps).
+// textureless_cost where no view sees the window or keyframe 1's window is flat; 100 where it is
+// textured and flat in every view (no match); else 100 (1 - mean NCC), plus 0.5 (so that
+// truncation rounds). Branch-free (a clamp here would not vectorise: the caller clamps).
 GF_VECTOR_CLONES inline void CostRow(const float* __restrict sum, const float* __restrict count,
                                      const float* __restrict var_i, const float* __restrict seen,
                                      int begin, int end, float min_var, float textureless_cost,

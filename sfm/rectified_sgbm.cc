@@ -36,11 +36,10 @@ double Rectify(const Camera& camera, const SE3& second_from_first, double alpha,
 
 // Scales a rectified projection's focal length by `s` about the pixel `fixed` (the view direction
 // there stays at that pixel), and the baseline term with it.
-void ScaleProjection(double s, const Eigen::Vector2d& fixed, const Eigen::Vector2d& fixed_after,
-                     cv::Mat* p) {
+void ScaleProjection(double s, const Eigen::Vector2d& fixed, cv::Mat* p) {
   for (int row = 0; row < 2; ++row) {
     p->at<double>(row, row) *= s;
-    p->at<double>(row, 2) = fixed_after[row] + s * (p->at<double>(row, 2) - fixed[row]);
+    p->at<double>(row, 2) = fixed[row] + s * (p->at<double>(row, 2) - fixed[row]);
     p->at<double>(row, 3) *= s;
   }
 }
@@ -156,8 +155,8 @@ SgbmRectification RectifyForSgbm(const Camera& camera, const SE3& key1_from_key2
   }
   if (scale < 1.0) {
     r.rescaled = true;
-    ScaleProjection(scale, Centre(r.size), Centre(r.size), &r.p_left);
-    ScaleProjection(scale, Centre(r.size), Centre(r.size), &r.p_right);
+    ScaleProjection(scale, Centre(r.size), &r.p_left);
+    ScaleProjection(scale, Centre(r.size), &r.p_right);
   }
   r.fb = scale * fb;
   // Magnified past max_zoom, the same field of view goes onto a smaller image (a smaller search),
@@ -171,8 +170,8 @@ SgbmRectification RectifyForSgbm(const Camera& camera, const SE3& key1_from_key2
     r.size = cv::Size(static_cast<int>(std::lround(s * camera.width)),
                       static_cast<int>(std::lround(s * camera.height)));
     const Eigen::Vector2d corner(-0.5, -0.5);  // the images' outer edges stay the views' edges
-    ScaleProjection(s, corner, corner, &r.p_left);
-    ScaleProjection(s, corner, corner, &r.p_right);
+    ScaleProjection(s, corner, &r.p_left);
+    ScaleProjection(s, corner, &r.p_right);
     r.fb *= s;
     width = r.vertical ? r.size.height : r.size.width;
     height = r.vertical ? r.size.width : r.size.height;
