@@ -57,9 +57,12 @@ int FrameCountOf(const std::string& range, const std::string& command) {
   return end;
 }
 
-ReconstructionSummary RunPipeline(const ReconstructOptions& options, FrameSource* source,
-                                  RunSink* sink, RunSink* without_fill, const std::string& label) {
+ReconstructionSummary RunPipeline(
+    const ReconstructOptions& options, FrameSource* source, RunSink* sink, RunSink* without_fill,
+    const std::string& label,
+    const std::function<void(const nlohmann::ordered_json& report)>& finish) {
   ReconstructionOptions pipeline = options.pipeline;
+  pipeline.allow_lost = options.allow_lost;
   pipeline.input_path = options.input;
   pipeline.config_file = options.config_file;
   if (!options.source.camera_file.empty())
@@ -89,18 +92,15 @@ ReconstructionSummary RunPipeline(const ReconstructOptions& options, FrameSource
     if (!options.interrupt || !*options.interrupt) return "";
     return "interrupted by " + SignalName(*options.interrupt);
   };
+  callbacks.finish = finish;
   const ReconstructionSummary s = reconstruction.Run(*source, sink, callbacks, without_fill);
   progress.Finish();
+  if (s.refused) throw InputError(options.input, s.stopped_because);
   if (!s.complete)
     throw Interrupted(options.interrupt ? options.interrupt->load() : 0,
-                      options.out_dir + ": " + s.stopped_because + " after " +
-                          std::to_string(s.frames) +
+                      options.out_dir + ": " + s.stopped_because + " during " + s.stopped_during +
+                          " after " + std::to_string(s.frames) +
                           " frames; partial run written (\"complete\": false)");
-  if (s.most_lost && !options.allow_lost)
-    throw InputError(options.input, s.warnings.back() +
-                                        ": the trajectory is not usable (is the depth valid? "
-                                        "`glassfusion info` shows its holes); --allow-lost "
-                                        "accepts such a run");
   return s;
 }
 
@@ -110,20 +110,25 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
   // The input first: a bad input leaves no run folder behind.
   std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, options.source);
   FolderRunSink sink(options.out_dir, options.force);
-  ReconstructionSummary s = RunPipeline(options, source.get(), &sink, nullptr, "reconstruct");
-  if (options.mesh && options.pipeline.fusion) {
-    const MeshSummary m =
-        WriteMapMesh(ReadSurfelPly((fs::path(options.out_dir) / "map.ply").string()),
-                     (fs::path(options.out_dir) / "mesh.ply").string(), {});
-    spdlog::info("{}", m.BriefReport());
-  }
-  // The run is complete without its page: a report that cannot be made is a warning.
-  try {
-    WriteRunReport(options.out_dir, options.input);
-  } catch (const std::exception& e) {
-    spdlog::warn("{}/report.html not written: {}", options.out_dir, e.what());
-  }
-  return s;
+  // Before the final report.json: the mesh and the page (a failure of either is a warning in it).
+  auto finish = [&](const nlohmann::ordered_json& report) {
+    if (options.mesh && options.pipeline.fusion) {
+      try {
+        const MeshSummary m =
+            WriteMapMesh(ReadSurfelPly((fs::path(options.out_dir) / "map.ply").string()),
+                         (fs::path(options.out_dir) / "mesh.ply").string(), {});
+        spdlog::info("{}", m.BriefReport());
+      } catch (const std::exception& e) {
+        throw std::runtime_error(options.out_dir + "/mesh.ply not written: " + e.what());
+      }
+    }
+    try {
+      WriteRunReport(options.out_dir, options.input, report);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(options.out_dir + "/report.html not written: " + e.what());
+    }
+  };
+  return RunPipeline(options, source.get(), &sink, nullptr, "reconstruct", finish);
 }
 
 }  // namespace gf

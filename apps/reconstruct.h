@@ -5,11 +5,15 @@
 // DIR must be new or empty, or hold an earlier run and `force` be set. A run that must stop still
 // writes what it processed with "complete": false (see reconstruction.h) and then throws:
 // InputError for bad input or an output that cannot be written, Interrupted for Ctrl-C/SIGTERM
-// (through `interrupt`). A run that loses tracking on most frames throws InputError after writing
-// its outputs unless allow_lost.
+// (through `interrupt`). A run refused as not usable (tracking lost on most frames unless
+// allow_lost, an empty map, a stage that failed on everything: ReconstructionSummary::refused)
+// throws InputError after writing its outputs. mesh.ply and report.html are written before the
+// final report.json.
 #pragma once
 
 #include <atomic>
+#include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "acquisition/frame_source.h"
@@ -41,9 +45,11 @@ int FrameCountOf(const std::string& range, const std::string& command);
 ReconstructionSummary RunReconstruct(const ReconstructOptions& options);
 
 // The pipeline over `source` (opened from options.input) into `sink` (and `without_fill`, may be
-// null: see Reconstruction::Run), with terminal progress labelled `label` and Ctrl-C; throws as
-// RunReconstruct does.
-ReconstructionSummary RunPipeline(const ReconstructOptions& options, FrameSource* source,
-                                  RunSink* sink, RunSink* without_fill, const std::string& label);
+// null: see Reconstruction::Run), with terminal progress labelled `label` and Ctrl-C; `finish`
+// (may be empty) as ReconstructionCallbacks::finish. Throws as RunReconstruct does.
+ReconstructionSummary RunPipeline(
+    const ReconstructOptions& options, FrameSource* source, RunSink* sink, RunSink* without_fill,
+    const std::string& label,
+    const std::function<void(const nlohmann::ordered_json& report)>& finish = {});
 
 }  // namespace gf

@@ -234,8 +234,7 @@ void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& 
   r->Links(links);
 }
 
-void WriteRunReport(const std::string& run_dir, const std::string& input) {
-  const json report = json::parse(ReadTextFile((fs::path(run_dir) / "report.json").string()));
+void WriteRunReport(const std::string& run_dir, const std::string& input, const json& report) {
   const Trajectory estimate = ReadTumTrajectory((fs::path(run_dir) / "trajectory.txt").string());
   const std::string truth_file = GroundTruthBeside(input);
   const Trajectory truth = truth_file.empty() ? Trajectory() : ReadTrajectory(truth_file);

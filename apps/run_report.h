@@ -52,8 +52,10 @@ void AddSettings(HtmlReport* r, const nlohmann::ordered_json& report);
 // Links to the run folder's outputs that exist, with what each holds.
 void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& prefix);
 
-// RUN/report.html for `reconstruct`: every section above, for the run in run_dir (its input's
-// groundtruth.txt, when there is one, for the ATE and the trajectory figure).
-void WriteRunReport(const std::string& run_dir, const std::string& input);
+// RUN/report.html for `reconstruct`: every section above, for the run in run_dir whose report is
+// `report` (its report.json; the page is written before it) and its input's groundtruth.txt,
+// when there is one, for the ATE and the trajectory figure.
+void WriteRunReport(const std::string& run_dir, const std::string& input,
+                    const nlohmann::ordered_json& report);
 
 }  // namespace gf

@@ -75,16 +75,23 @@ void FillStage::Cancel() {
 }
 
 void FillStage::Run() {
+  // However the worker ends, the fusion stage stops waiting for its fills.
   struct Stopped {
     std::atomic<bool>* flag;
-    ~Stopped() { *flag = true; }
-  } stopped{&stopped_};
+    FusionStage* fusion;
+    ~Stopped() {
+      *flag = true;
+      if (fusion) fusion->CloseFills();
+    }
+  } stopped{&stopped_, fusion_};
   KeyframeFiller filler(camera_, options_.Filler());
   Offered item;
+  int processed = 0;
   while (!cancelled_ && queue_.Pop(&item)) {
     if (!item.measured_depth.empty()) measured_of_[item.frame.index] = item.measured_depth;
     keyframe_of_.push_back(item.keyframe);  // the filler numbers keyframes as they arrive
     for (const FilledKeyframe& k : filler.Add(item.frame, item.world_from_camera)) Write(k);
+    if (fusion_) fusion_->FillsProcessed(++processed);  // its fills are all offered
   }
   if (!cancelled_)
     for (const FilledKeyframe& k : filler.Flush([&] { return cancelled_.load(); })) Write(k);

@@ -5,7 +5,9 @@
 // input a keyframe that finds the queue full is dropped from the fill (and counted), so tracking
 // never waits on stereo; for recorded input Offer() waits for room (options.drop_when_busy). The
 // worker runs the KeyframeFiller (sfm/keyframe_filler.h: pairing, stereo, carrying earlier fills)
-// and writes each keyframe's images through the RunSink (run_sink.h).
+// and writes each keyframe's images through the RunSink (run_sink.h), then hands each keyframe's
+// fill to the fusion stage, saying after each keyframe offered that it is processed (the fusion
+// stage joins fills to the map at fixed points of the sequence: fusion_stage.h).
 //
 // Failures are contained per keyframe: one whose features, pairing, stereo or carry throws is
 // skipped with a warning naming it and the reason (its files hold the sensor's depth alone),

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 
 #include "acquisition/errors.h"
 #include "acquisition/stats.h"
@@ -61,7 +62,7 @@ json SurfelReport(const SurfelFusion& fusion, const std::vector<json>& over_time
 }
 
 FusionStage::FusionStage(const Camera& camera, const FusionStageOptions& options,
-                         std::vector<Variant> variants, const PoseCorrections* corrections)
+                         std::vector<Variant> variants, PoseCorrections* corrections)
     : camera_(camera),
       options_(options),
       queue_(options.queue_capacity),
@@ -70,7 +71,7 @@ FusionStage::FusionStage(const Camera& camera, const FusionStageOptions& options
   GF_CHECK(options.Check(&problem), problem);
   for (Variant& v : variants) {
     GF_CHECK(v.sink != nullptr, "every fusion variant needs a sink");
-    maps_.push_back({std::move(v), SurfelFusion(camera, options.fusion), {}, {}, {}, 0, 0, 0});
+    maps_.push_back({std::move(v), SurfelFusion(camera, options.fusion), {}, {}, {}, 0, 0, {}, 0, 0});
   }
   worker_.Start([this] { Run(); });
 }
@@ -80,12 +81,16 @@ FusionStage::~FusionStage() {
   worker_.Join();
 }
 
-void FusionStage::OfferFrame(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe) {
+void FusionStage::OfferFrame(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe,
+                             SequencePoint at) {
   Item item;
   item.frame = frame;
   item.world_from_camera = world_from_camera;
   item.keyframe = keyframe;
-  Offer(std::move(item));
+  item.at = at;
+  const bool queued =
+      options_.drop_when_busy ? queue_.TryPush(std::move(item)) : queue_.Push(std::move(item));
+  if (!queued) ++dropped_;
 }
 
 void FusionStage::OfferFill(const FilledKeyframe& filled, int keyframe) {
@@ -104,13 +109,26 @@ void FusionStage::OfferFill(const FilledKeyframe& filled, int keyframe) {
   if (!filled.fill.corroborated.empty())
     item.fill_mask.setTo(kCorroboratedFill,
                          (item.fill_mask != 0) & (filled.fill.corroborated != 0));
-  Offer(std::move(item));
+  std::lock_guard<std::mutex> lock(fills_mutex_);
+  if (options_.drop_when_busy && fills_.size() >= static_cast<size_t>(options_.queue_capacity)) {
+    ++dropped_;
+    return;
+  }
+  item.produced_at = fills_processed_ + 1;
+  fills_.push_back(std::move(item));
+  fills_changed_.notify_all();
 }
 
-void FusionStage::Offer(Item item) {
-  const bool queued =
-      options_.drop_when_busy ? queue_.TryPush(std::move(item)) : queue_.Push(std::move(item));
-  if (!queued) ++dropped_;
+void FusionStage::FillsProcessed(int n) {
+  std::lock_guard<std::mutex> lock(fills_mutex_);
+  fills_processed_ = n;
+  fills_changed_.notify_all();
+}
+
+void FusionStage::CloseFills() {
+  std::lock_guard<std::mutex> lock(fills_mutex_);
+  fills_closed_ = true;
+  fills_changed_.notify_all();
 }
 
 void FusionStage::Finish(const std::function<bool()>& poll) {
@@ -128,20 +146,21 @@ void FusionStage::Finish(const std::function<bool()>& poll) {
 void FusionStage::Cancel() {
   cancelled_ = true;
   queue_.Close();
+  std::lock_guard<std::mutex> lock(fills_mutex_);
+  fills_changed_.notify_all();
 }
 
 void FusionStage::Run() {
   Item item;
   while (!cancelled_ && queue_.Pop(&item)) {
-    if (corrections_ && corrections_->version() != applied_version_) ApplyCorrections();
-    newest_keyframe_ = std::max(newest_keyframe_, item.keyframe);
-    const SE3 world_from_camera =
-        PoseCorrections::Lookup(applied_, item.keyframe) * item.world_from_camera;
-    for (Map& m : maps_) Fuse(item, world_from_camera, &m);
-    if (item.fill) continue;
+    CatchUp(item.at);
+    if (cancelled_) break;
+    FuseItem(item);
     ++frames_fused_;
     if (options_.predict) {
       // Rendered where the map is; handed back at the tracked pose (tracking's own frame).
+      const SE3 world_from_camera =
+          PoseCorrections::Lookup(applied_, item.keyframe) * item.world_from_camera;
       cv::Mat depth = maps_.front().fusion.RenderDepth(world_from_camera);
       std::lock_guard<std::mutex> lock(prediction_mutex_);
       prediction_depth_ = depth;
@@ -150,17 +169,55 @@ void FusionStage::Run() {
       prediction_ready_.notify_all();
     }
   }
-  // The last corrections (loop closure has finished before the queue closes).
-  if (!cancelled_ && corrections_ && corrections_->version() != applied_version_)
-    ApplyCorrections();
+  if (!cancelled_) {
+    // The last corrections (loop closure has finished before the queue closes), then the fills
+    // of the fill stage's last keyframes (it has finished too), in the order produced.
+    if (corrections_ && corrections_->version() != applied_version_) {
+      int version = 0;
+      std::map<int, SE3> latest = corrections_->Snapshot(&version);
+      ApplyCorrections(std::move(latest), version);
+    }
+    for (const Item& fill : TakeFills(std::numeric_limits<int>::max(), false)) FuseItem(fill);
+  }
   std::lock_guard<std::mutex> lock(prediction_mutex_);
   prediction_closed_ = true;
   prediction_ready_.notify_all();
 }
 
-void FusionStage::ApplyCorrections() {
-  int version = 0;
-  std::map<int, SE3> latest = corrections_->Snapshot(&version);
+void FusionStage::CatchUp(const SequencePoint& at) {
+  const bool in_sequence = !options_.drop_when_busy;
+  if (corrections_) {
+    int version = 0;
+    std::map<int, SE3> latest =
+        in_sequence ? corrections_->AtProcessed(at.loops, &version, [&] { return cancelled_.load(); })
+                    : corrections_->Snapshot(&version);
+    if (version != applied_version_) ApplyCorrections(std::move(latest), version);
+  }
+  for (const Item& fill :
+       TakeFills(in_sequence ? at.fills : std::numeric_limits<int>::max(), in_sequence))
+    FuseItem(fill);
+}
+
+std::vector<FusionStage::Item> FusionStage::TakeFills(int n, bool wait) {
+  std::unique_lock<std::mutex> lock(fills_mutex_);
+  if (wait)
+    fills_changed_.wait(lock, [&] { return cancelled_ || fills_closed_ || fills_processed_ >= n; });
+  std::vector<Item> due;
+  while (!fills_.empty() && fills_.front().produced_at <= n) {
+    due.push_back(std::move(fills_.front()));
+    fills_.pop_front();
+  }
+  return due;
+}
+
+void FusionStage::FuseItem(const Item& item) {
+  newest_keyframe_ = std::max(newest_keyframe_, item.keyframe);
+  const SE3 world_from_camera =
+      PoseCorrections::Lookup(applied_, item.keyframe) * item.world_from_camera;
+  for (Map& m : maps_) Fuse(item, world_from_camera, &m);
+}
+
+void FusionStage::ApplyCorrections(std::map<int, SE3> latest, int version) {
   std::vector<SE3> change;
   for (int k = 0; k <= newest_keyframe_; ++k)
     change.push_back(PoseCorrections::Lookup(latest, k) *
@@ -189,8 +246,11 @@ cv::Mat FusionStage::RenderFills(const SE3& world_from_camera) {
 bool FusionStage::Prediction(int frames, std::chrono::milliseconds timeout, cv::Mat* depth,
                              SE3* world_from_camera) {
   std::unique_lock<std::mutex> lock(prediction_mutex_);
-  prediction_ready_.wait_for(lock, timeout,
-                             [&] { return prediction_closed_ || prediction_frames_ >= frames; });
+  auto ready = [&] { return prediction_closed_ || prediction_frames_ >= frames; };
+  if (options_.drop_when_busy)
+    prediction_ready_.wait_for(lock, timeout, ready);
+  else
+    prediction_ready_.wait(lock, ready);  // recorded input: the same model every run
   if (prediction_depth_.empty() || prediction_frames_ < frames) return false;
   *depth = prediction_depth_;
   *world_from_camera = prediction_pose_;
@@ -215,7 +275,8 @@ void FusionStage::Fuse(const Item& item, const SE3& world_from_camera, Map* m) {
     spdlog::debug("{} {} {}: {}", m->variant.name, item.fill ? "fill" : "frame",
                   KeyframeName(item.frame), s.BriefReport());
   } catch (const std::exception& e) {
-    ++m->failed;
+    ++(item.fill ? m->failed_fills : m->failed_frames);
+    if (m->first_failure.empty()) m->first_failure = e.what();
     spdlog::warn("fusion ({}): {} {} skipped: {}", m->variant.name,
                  item.fill ? "fill of keyframe" : "frame", KeyframeName(item.frame), e.what());
   }
@@ -241,7 +302,10 @@ json FusionStage::Report(size_t index) const {
   r["merged_as_copies"] = m.redundant;
   r["budget"] = options_.fusion.max_surfels;
   r["removed_over_budget"] = m.over_budget;
-  r["failed_items"] = m.failed;
+  r["failed_items"] = m.failed_frames + m.failed_fills;
+  r["failed_frames"] = m.failed_frames;
+  r["failed_fills"] = m.failed_fills;
+  r["first_failure"] = m.first_failure.empty() ? json() : json(m.first_failure);
   r["dropped_items"] = dropped_.load();
   r["corrections_applied"] = corrections_applied_;
   return r;

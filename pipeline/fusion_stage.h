@@ -1,30 +1,41 @@
 // The fusion stage of the reconstruction: every tracked frame's depth and every keyframe's stereo
 // fill fused into surfel maps (surfels/fusion.h) in its own thread.
 //
-// The track stage offers each tracked frame (with its pose and keyframe); the fill stage offers
-// each keyframe's own stereo fill as it is written (the carried fills are the fills of earlier
-// keyframes, which the map already fuses from those keyframes). Items queue in the order they
-// arrive; for recorded input the producers wait for room, for live input a full queue drops the
-// item (counted). The stage keeps one map per variant: a run keeps one ("with fill", or the
-// sensor alone with --no-fill); `compare` keeps two, the same frames fused with and without the
-// fills. Finish() drains the queue, joins the thread and writes each variant's map.ply through its
-// sink; Report() gives report.json's "surfels" object for a variant.
+// The track stage offers each tracked frame (with its pose and keyframe) into a bounded queue: for
+// recorded input it waits for room, for live input a full queue drops the frame (counted). The
+// fill stage offers each keyframe's own stereo fill as it is written (the carried fills are the
+// fills of earlier keyframes, which the map already fuses from those keyframes). The stage keeps
+// one map per variant: a run keeps one ("with fill", or the sensor alone with --no-fill);
+// `compare` keeps two, the same frames fused with and without the fills. Finish() drains the
+// queue, joins the thread and writes each variant's map.ply through its sink; Report() gives
+// report.json's "surfels" object for a variant.
 //
 // With loop closure, frames arrive with their tracked poses and keyframes; the stage fuses each
-// at its keyframe's current correction (pose_corrections.h), and when new corrections are
-// published it first moves every surfel with the keyframe it belongs to (ElasticFusion deforms
-// its map; here the map is rigid per keyframe, which is what the pose graph corrects).
+// at its keyframe's correction (pose_corrections.h), and when the corrections change it first
+// moves every surfel with the keyframe it belongs to (ElasticFusion deforms its map; here the map
+// is rigid per keyframe, which is what the pose graph corrects).
+//
+// Reproducible (recorded input): what joins the map, and when, is fixed by the frame sequence,
+// never by which thread finishes first. Each frame carries a SequencePoint: the keyframes the
+// fill and loop stages must have processed before it is fused. The stage waits for them, then
+// fuses the fills those keyframes produced (in the order produced) and applies the corrections
+// as they stood after them (PoseCorrections::AtProcessed); the fills produced at the end of the
+// fill stage (its last keyframes) and the final corrections join after the last frame. Live
+// input never waits: fills join when they arrive (at most queue_capacity wait; more are dropped,
+// counted) and the newest corrections apply.
 //
 // Failures are contained per item: a frame or fill whose fusion throws is skipped, counted and
 // logged; the run goes on.
 //
-// Thread-safety: Offer*() from the track and fill threads; Cancel() from any thread; Finish() and
-// Report() from the owner's.
+// Thread-safety: OfferFrame() from the track thread; OfferFill(), FillsProcessed() and
+// CloseFills() from the fill thread; Cancel() from any thread; Finish() and Report() from the
+// owner's.
 #pragma once
 
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <deque>
 #include <functional>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -48,7 +59,10 @@ struct FusionStageOptions {
   int queue_capacity = 32;     // items (frames and fills) waiting for the worker
   int count_every = 10;        // surfel counts are recorded every this many frames
   bool fuse_carried = false;   // fuse the carried fills too (they repeat earlier keyframes')
-  bool drop_when_busy = true;  // live input; recorded input waits (set by the pipeline)
+  // Live input (set by the pipeline): a full queue drops the item, and fills and corrections join
+  // when they arrive. Recorded input (false): producers wait for room, and fills and corrections
+  // join at the frames' SequencePoints.
+  bool drop_when_busy = true;
   // After each frame, render the first variant's model at that frame's pose for frame-to-model
   // tracking (Prediction()).
   bool predict = false;
@@ -64,6 +78,14 @@ struct FusionStageOptions {
   bool Check(std::string* message = nullptr) const;
 };
 
+// How far the fill and loop-closure stages must have got before a frame joins the map (recorded
+// input): the keyframes each had been handed when the frame was tracked, this frame's own
+// keyframe included.
+struct SequencePoint {
+  int fills = 0;  // keyframes the fill stage must have processed: their fills join first
+  int loops = 0;  // keyframes the loop stage must have processed: its corrections then apply
+};
+
 class FusionStage {
  public:
   struct Variant {
@@ -73,20 +95,28 @@ class FusionStage {
   };
   // `corrections` (may be null: poses as tracked) must outlive the stage.
   FusionStage(const Camera& camera, const FusionStageOptions& options,
-              std::vector<Variant> variants, const PoseCorrections* corrections = nullptr);
+              std::vector<Variant> variants, PoseCorrections* corrections = nullptr);
   ~FusionStage();  // cancels and joins if Finish() was not called
   FusionStage(const FusionStage&) = delete;
   FusionStage& operator=(const FusionStage&) = delete;
 
-  void OfferFrame(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe);
+  void OfferFrame(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe,
+                  SequencePoint at = {});
+  // A keyframe's fill, produced while the fill stage processes its (n + 1)-th keyframe, n being
+  // the last FillsProcessed(n); it joins the map before the first frame whose at.fills > n.
   void OfferFill(const FilledKeyframe& filled, int keyframe);
+  // The fill stage has processed its first n keyframes (n grows by one at a time).
+  void FillsProcessed(int n);
+  // The fill stage has ended (no more fills): frames stop waiting for it.
+  void CloseFills();
   // Fuses what is queued, joins the worker, writes the maps. Rethrows a map that could not be
   // written. `poll` (may be empty) is called every 50 ms while it waits; true cancels the rest.
   void Finish(const std::function<bool()>& poll = {});
   void Cancel();
   int frames_fused() const { return frames_fused_; }
   // The model's depth at the pose of the frames_fused()-th frame, once at least `frames` frames
-  // are fused (waits up to `timeout`); false when none is ready in time or the stage stopped.
+  // are fused (waits up to `timeout` for live input; recorded input waits until they are);
+  // false when none is ready in time or the stage stopped.
   bool Prediction(int frames, std::chrono::milliseconds timeout, cv::Mat* depth,
                   SE3* world_from_camera);
   // report.json's "surfels" for variant `index`.
@@ -102,6 +132,8 @@ class FusionStage {
     RgbdFrame frame;
     SE3 world_from_camera;
     int keyframe = 0;
+    SequencePoint at;                             // frames only
+    int produced_at = 0;                          // fills only: the fill stage's keyframe (1-based)
     cv::Mat filled_depth, fill_mask, confidence;  // fills only
   };
   struct Map {
@@ -109,20 +141,33 @@ class FusionStage {
     SurfelFusion fusion;
     std::vector<nlohmann::ordered_json> over_time;  // counts every count_every frames
     std::vector<double> frame_ms, fill_ms;
-    int failed = 0;
+    int failed_frames = 0, failed_fills = 0;
+    std::string first_failure;  // what the first failed item threw
     long redundant = 0, over_budget = 0;  // surfels merged as copies, removed over the budget
   };
-  void Offer(Item item);
   void Run();
+  // Before a frame: the corrections and fills due at `at` (recorded input), or those that have
+  // arrived (live).
+  void CatchUp(const SequencePoint& at);
+  // The fills produced up to the fill stage's keyframe n, in the order produced; with `wait`,
+  // once the fill stage has processed n keyframes (or ended).
+  std::vector<Item> TakeFills(int n, bool wait);
+  // Fuses the item into every map at its keyframe's applied correction.
+  void FuseItem(const Item& item);
   void Fuse(const Item& item, const SE3& world_from_camera, Map* map);
-  // Moves the maps by what the corrections changed since they were last applied.
-  void ApplyCorrections();
+  // Moves the maps by what `latest` (of `version`) changes against the corrections applied.
+  void ApplyCorrections(std::map<int, SE3> latest, int version);
   void Record(Map* map) const;
 
   Camera camera_;
   FusionStageOptions options_;
   std::vector<Map> maps_;
   BoundedQueue<Item> queue_;
+  std::mutex fills_mutex_;  // the fills, from the fill thread
+  std::condition_variable fills_changed_;
+  std::deque<Item> fills_;  // in the order produced
+  int fills_processed_ = 0;
+  bool fills_closed_ = false;
   std::atomic<int> frames_fused_{0};
   std::atomic<int> dropped_{0};
   std::atomic<bool> cancelled_{false};
@@ -132,7 +177,7 @@ class FusionStage {
   bool prediction_closed_ = false;
   cv::Mat prediction_depth_;
   SE3 prediction_pose_;
-  const PoseCorrections* corrections_;
+  PoseCorrections* corrections_;  // read (AtProcessed forgets what it has answered)
   std::map<int, SE3> applied_;  // corrections the maps are at (worker thread)
   int applied_version_ = 0;
   int newest_keyframe_ = -1;  // of the items fused so far

@@ -67,10 +67,12 @@ LoopClosureStage::~LoopClosureStage() {
   worker_.Join();
 }
 
-void LoopClosureStage::Offer(LoopKeyframeItem item) {
+bool LoopClosureStage::Offer(LoopKeyframeItem item) {
   const bool queued =
       options_.drop_when_busy ? queue_.TryPush(std::move(item)) : queue_.Push(std::move(item));
   if (!queued) ++dropped_;
+  offered_ += queued;
+  return queued;
 }
 
 void LoopClosureStage::Cancel() {
@@ -87,6 +89,11 @@ void LoopClosureStage::Finish(const std::function<bool()>& poll) {
 }
 
 void LoopClosureStage::Run() {
+  // However the worker ends, readers of the corrections stop waiting for it.
+  struct Close {
+    PoseCorrections* corrections;
+    ~Close() { corrections->Close(); }
+  } close{corrections_};
   LoopKeyframeItem item;
   while (!cancelled_ && queue_.Pop(&item)) {
     const auto start = Clock::now();
@@ -97,7 +104,7 @@ void LoopClosureStage::Run() {
       spdlog::warn("loop closure: keyframe {} skipped: {}", KeyframeName(item.frame), e.what());
     }
     keyframe_ms_.push_back(Ms(start));
-    ++keyframes_done_;
+    corrections_->MarkProcessed(++keyframes_done_);
   }
   if (!cancelled_ && unoptimised_loops_) Optimise();
 }
@@ -208,6 +215,12 @@ std::optional<Relocalisation> LoopClosureStage::Relocalise(const RgbdFrame& fram
                                                            const FrameFeatures& features) {
   ++relocalisation_attempts_;
   if (features.empty()) return std::nullopt;
+  // Recorded input: against every keyframe offered before this frame, however far the loop
+  // thread has got (the same answer every run).
+  if (!options_.drop_when_busy) {
+    int version = 0;
+    corrections_->AtProcessed(offered_, &version, [&] { return cancelled_.load(); });
+  }
   const auto query = MakeLoopKeyframe(-1, frame, SE3(), std::make_shared<FrameFeatures>(features));
   std::shared_lock<std::shared_mutex> lock(database_mutex_);
   std::vector<int> ids;

@@ -10,7 +10,10 @@
 // a lost frame is looked up in the same database, from the tracking thread.
 //
 // Failures are contained per keyframe: one whose loop search throws is logged and counted, and the
-// run goes on. Finish() drains the queue, optimises once more and publishes.
+// run goes on. Finish() drains the queue, optimises once more and publishes. After each keyframe
+// it marks the corrections processed (PoseCorrections::MarkProcessed), so that the fusion stage
+// applies them at fixed points of the sequence; for recorded input a relocalisation first waits
+// for every keyframe offered before it, so that it searches the same database every run.
 //
 // Thread-safety: Offer() from the tracking thread; Relocalise() from the tracking thread;
 // Cancel() from any thread; Finish() and Report() from the owner's.
@@ -91,7 +94,8 @@ class LoopClosureStage : public Relocaliser {
   LoopClosureStage(const LoopClosureStage&) = delete;
   LoopClosureStage& operator=(const LoopClosureStage&) = delete;
 
-  void Offer(LoopKeyframeItem item);
+  // False when the keyframe was dropped (queue full and drop_when_busy, or the stage stopped).
+  bool Offer(LoopKeyframeItem item);
   // Relocaliser: the best appearance matches among the keyframes searched so far.
   std::optional<Relocalisation> Relocalise(const RgbdFrame& frame,
                                            const FrameFeatures& features) override;
@@ -132,6 +136,7 @@ class LoopClosureStage : public Relocaliser {
   int same_place_ = 0;  // keyframes not stored: their place was (same_place)
   std::vector<double> keyframe_ms_, optimise_ms_;
   std::atomic<int> keyframes_done_{0};
+  int offered_ = 0;  // keyframes queued (tracking thread)
   std::atomic<int> dropped_{0};
   std::atomic<int> relocalisation_attempts_{0}, relocalised_{0};
   std::atomic<bool> cancelled_{false};

@@ -25,7 +25,10 @@ json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
                 const LoopClosureStage* loop, const ReconstructionSummary& summary) {
   json report;
   report["complete"] = summary.complete;
-  if (!summary.complete) report["stopped_because"] = summary.stopped_because;
+  if (!summary.complete) {
+    report["stopped_because"] = summary.stopped_because;
+    report["stopped_during"] = summary.stopped_during;
+  }
   report["input"] = {{"path", options.input_path.empty() ? source.Input() : options.input_path},
                      {"kind", source.Kind()},
                      {"first_frame", options.first_frame},
@@ -151,11 +154,13 @@ json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajector
   for (size_t i = 0; i < trajectory.size() && i < names.size(); ++i)
     poses[names[i]] = trajectory[i].world_from_camera;
   const auto start = Clock::now();
-  int keyframes = 0;
+  const std::vector<KeyframeFill> keyframes_filled = fill.keyframes();
+  int keyframes = 0, done = 0;
   long pixels = 0;
   bool stopped = false;
-  for (const KeyframeFill& k : fill.keyframes()) {
+  for (const KeyframeFill& k : keyframes_filled) {
     if ((stopped = stop())) break;
+    ++done;
     const auto pose = poses.find(k.timestamp);
     if (!k.failure.empty() || pose == poses.end()) continue;
     try {
@@ -170,7 +175,12 @@ json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajector
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   spdlog::info("model completion: {} hole pixels of {} keyframes from the map's fills, {:.1f} s",
                pixels, keyframes, seconds);
-  return {{"keyframes", keyframes}, {"pixels", pixels}, {"seconds", seconds}, {"stopped", stopped}};
+  return {{"keyframes", keyframes},
+          {"pixels", pixels},
+          {"seconds", seconds},
+          {"stopped", stopped},
+          {"keyframes_done", done},
+          {"keyframes_to_do", static_cast<int>(keyframes_filled.size())}};
 }
 
 // Runs `finish`, keeping the first error of the run.
@@ -191,7 +201,8 @@ std::unique_ptr<Reconstruction::Stages> Reconstruction::MakeStages(FrameSource& 
   // spdlog builds its default logger on first use; here, before the stage threads log through it.
   spdlog::default_logger_raw();
   auto s = std::make_unique<Stages>();
-  const PoseCorrections* corrections = options_.loop_closure ? &s->corrections : nullptr;
+  s->corrections.RecordHistory(!live);  // recorded input: corrections at fixed points
+  PoseCorrections* corrections = options_.loop_closure ? &s->corrections : nullptr;
   if (options_.fusion) {
     FusionStageOptions fusion_options = options_.fusion_options;
     fusion_options.drop_when_busy = live;
@@ -253,40 +264,109 @@ ReconstructionSummary Reconstruction::Summarise(const FrameSource& source, const
   if (summary.most_lost)
     summary.warnings.push_back("tracking was lost on " + std::to_string(summary.lost) + " of " +
                                std::to_string(summary.frames) + " frames");
+  if (summary.complete) RefuseIfUnusable(s, &summary);
   summary.report =
       MakeReport(options_, source, tracking, s.fill.get(), s.fusion.get(), s.loop.get(), summary);
   return summary;
 }
 
+void Reconstruction::RefuseIfUnusable(const Stages& s, ReconstructionSummary* summary) const {
+  std::string why;
+  const int tracked = summary->frames - summary->lost;
+  if (summary->most_lost && !options_.allow_lost) {
+    why = summary->warnings.back() +
+          ": the trajectory is not usable (is the depth valid? `glassfusion info` shows its "
+          "holes; --allow-lost accepts such a run)";
+  } else if (s.fusion && tracked > 0) {
+    const json f = s.fusion->Report();
+    if (f["failed_frames"].get<int>() >= tracked)
+      why = "the fusion failed on every frame (" + std::to_string(tracked) +
+            "): " + f["first_failure"].get<std::string>();
+    else if (summary->surfels == 0)
+      why = "the map is empty: no frame gave a surfel (are the camera and the depth scale right?)";
+  }
+  if (why.empty() && s.fill) {
+    const json f = s.fill->Report();
+    const size_t failed = f["failed_keyframes"].size();
+    if (failed > 0 && failed == static_cast<size_t>(f["keyframes_filled"].get<int>()))
+      why = "the fill failed on every keyframe (" + std::to_string(failed) + "): " +
+            f["failed_keyframes"][0]["reason"].get<std::string>();
+  }
+  if (why.empty()) return;
+  summary->complete = false;
+  summary->refused = true;
+  summary->stopped_because = why;
+  summary->stopped_during = "checking the result";
+}
+
+namespace {
+
+// `report` as written while the run has not finished: "complete" false, and why.
+json Unfinished(const json& report, const std::string& phase) {
+  json out = {{"complete", false},
+              {"stopped_because",
+               "unfinished: the run had not finished when this report was written (it is still "
+               "running, or it was killed)"},
+              {"stopped_during", phase}};
+  for (const auto& [key, value] : report.items())
+    if (!out.contains(key)) out[key] = value;
+  return out;
+}
+
+// The summary and its report marked not complete, `because`, during `phase`.
+void MarkIncomplete(const std::string& because, const std::string& phase,
+                    ReconstructionSummary* summary) {
+  summary->complete = false;
+  summary->stopped_because = because;
+  summary->stopped_during = phase;
+  json out = {{"complete", false}, {"stopped_because", because}, {"stopped_during", phase}};
+  for (const auto& [key, value] : summary->report.items())
+    if (!out.contains(key)) out[key] = value;
+  summary->report = out;
+}
+
+// The report of the without-fill folder (compare): the same run, its own map, no fill.
+json WithoutFillReport(const json& report, const json& surfels) {
+  json out = report;
+  out["config"]["stereo_fill"] = false;
+  out["fill"] = nullptr;
+  out["surfels"] = surfels;
+  return out;
+}
+
+}  // namespace
+
 void Reconstruction::WriteOutputs(const Stages& s, RunSink* sink, RunSink* without_fill,
-                                  ReconstructionSummary* summary) const {
+                                  const ReconstructionSummary& summary) const {
   const Trajectory trajectory = CorrectedTrajectory(s.tracker->record(), s.corrections);
+  const std::string next = "map completion";
   sink->WriteTrajectory(trajectory);
-  sink->WriteReport(summary->report);
+  sink->WriteReport(summary.complete ? Unfinished(summary.report, next) : summary.report);
   if (!without_fill) return;
-  // The same tracking, fused without the fill: its own map and surfels, no fill.
-  summary->surfels_without_fill = s.fusion->Report(1)["count"];
-  summary->report_without_fill = summary->report;
-  summary->report_without_fill["config"]["stereo_fill"] = false;
-  summary->report_without_fill["fill"] = nullptr;
-  summary->report_without_fill["surfels"] = s.fusion->Report(1);
   without_fill->WriteTrajectory(trajectory);
-  without_fill->WriteReport(summary->report_without_fill);
+  without_fill->WriteReport(summary.complete ? Unfinished(summary.report_without_fill, next)
+                                             : summary.report_without_fill);
 }
 
 void Reconstruction::CompleteKeyframes(const Stages& s, RunSink* sink,
                                        const std::function<bool()>& stop,
+                                       const std::string& stop_reason,
                                        ReconstructionSummary* summary) const {
   if (!s.fill || !s.fusion || !options_.fusion_options.complete_keyframes) return;
   std::vector<std::string> warnings;
-  summary->report["fill"]["model_completion"] = CompleteFromMap(
-      *s.fill, s.fusion.get(), CorrectedTrajectory(s.tracker->record(), s.corrections),
-      s.tracker->record().names, sink, stop, &warnings);
+  const json record = CompleteFromMap(*s.fill, s.fusion.get(),
+                                      CorrectedTrajectory(s.tracker->record(), s.corrections),
+                                      s.tracker->record().names, sink, stop, &warnings);
+  summary->report["fill"]["model_completion"] = record;
   for (const std::string& w : warnings) {
     summary->warnings.push_back(w);
     summary->report["warnings"].push_back(w);
   }
-  sink->WriteReport(summary->report);
+  if (record["stopped"].get<bool>())
+    MarkIncomplete(stop_reason, "map completion (" + std::to_string(record["keyframes_done"].get<int>()) +
+                                    " of " + std::to_string(record["keyframes_to_do"].get<int>()) +
+                                    " keyframes done)",
+                   summary);
 }
 
 ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
@@ -311,7 +391,7 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   sink->WriteCamera(run_camera);
   if (without_fill) without_fill->WriteCamera(run_camera);
   std::unique_ptr<Stages> s = MakeStages(source, sink, without_fill, live);
-  std::string stop_reason;
+  std::string stop_reason, phase = "tracking", stop_phase, error_phase;
   // Progress and stop requests, from this thread; true once a stop was asked for.
   auto poll = [&] {
     progress.frames = s->tracker->frames();
@@ -320,7 +400,8 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
     if (s->loop) progress.keyframes_searched = s->loop->keyframes_done();
     if (s->fusion) progress.frames_fused = s->fusion->frames_fused();
     if (callbacks.progress) callbacks.progress(progress);
-    if (stop_reason.empty() && callbacks.stop) stop_reason = callbacks.stop();
+    if (stop_reason.empty() && callbacks.stop && !(stop_reason = callbacks.stop()).empty())
+      stop_phase = phase;
     return !stop_reason.empty();
   };
   while (!s->tracker->WaitFor(std::chrono::milliseconds(50)))
@@ -333,20 +414,57 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   s->reader->Join();
   progress.tracking_done = true;
   std::exception_ptr error = s->tracker->error();
+  if (error) error_phase = phase;
   // The keyframes tracked before an error are valid: the fill, loop closure and fusion finish
   // them, unless a stop is asked for; the fusion last, with the fills and the final corrections.
-  if (s->fill) FinishStage([&] { s->fill->Finish(poll); }, &error);
-  if (s->loop) FinishStage([&] { s->loop->Finish(poll); }, &error);
-  if (s->fusion) FinishStage([&] { s->fusion->Finish(poll); }, &error);
+  auto finish = [&](const char* name, const std::function<void()>& f) {
+    phase = name;
+    const bool had_error = error != nullptr;
+    FinishStage(f, &error);
+    if (!had_error && error) error_phase = name;
+  };
+  if (s->fill) finish("fill", [&] { s->fill->Finish(poll); });
+  if (s->loop) finish("loop closure", [&] { s->loop->Finish(poll); });
+  if (s->fusion) finish("fusion", [&] { s->fusion->Finish(poll); });
   if (!error && stop_reason.empty() && s->tracker->record().frames == 0)
     error = std::make_exception_ptr(InputError(source.Input(), "no frames in the selected range"));
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   ReconstructionSummary summary = Summarise(source, *s, error, stop_reason, seconds);
-  WriteOutputs(*s, sink, without_fill, &summary);
-  if (summary.complete) CompleteKeyframes(*s, sink, poll, &summary);
+  if (!summary.complete && summary.stopped_during.empty())
+    summary.stopped_during = error ? error_phase : stop_phase;
+  if (!summary.complete) summary.report["stopped_during"] = summary.stopped_during;
+  if (without_fill) {
+    summary.surfels_without_fill = s->fusion->Report(1)["count"];
+    summary.report_without_fill = WithoutFillReport(summary.report, s->fusion->Report(1));
+  }
+  WriteOutputs(*s, sink, without_fill, summary);
+  phase = "map completion";
+  if (summary.complete) CompleteKeyframes(*s, sink, poll, stop_reason, &summary);
+  WriteFinalReports(callbacks, sink, without_fill, &summary);
   poll();
   if (error) std::rethrow_exception(error);
   return summary;
+}
+
+void Reconstruction::WriteFinalReports(const ReconstructionCallbacks& callbacks, RunSink* sink,
+                                       RunSink* without_fill,
+                                       ReconstructionSummary* summary) const {
+  if (summary->complete && callbacks.finish) {
+    try {
+      callbacks.finish(summary->report);
+    } catch (const std::exception& e) {
+      summary->warnings.push_back(e.what());
+      summary->report["warnings"].push_back(e.what());
+      spdlog::warn("{}", e.what());
+    }
+  }
+  if (without_fill) {
+    // The same end as the run's: complete, or stopped and why.
+    for (const char* key : {"complete", "stopped_because", "stopped_during"})
+      if (summary->report.contains(key)) summary->report_without_fill[key] = summary->report[key];
+    without_fill->WriteReport(summary->report_without_fill);
+  }
+  sink->WriteReport(summary->report);
 }
 
 }  // namespace gf

@@ -7,8 +7,21 @@
 // run must stop (a frame that cannot be read, an implausible depth scale, a keyframe that cannot
 // be written, or callbacks.stop returning a reason such as "interrupted by SIGINT"), it still
 // writes the trajectory of the frames processed, the camera and the report with "complete":
-// false and "stopped_because"; then Run() rethrows what stopped it (or, for a stop request,
-// returns with summary.complete false).
+// false, "stopped_because" and "stopped_during" (the phase: tracking, fill, loop closure, fusion,
+// map completion); then Run() rethrows what stopped it (or, for a stop request, returns with
+// summary.complete false).
+//
+// "complete" tells the truth: true only when every step the run promises has finished, the
+// keyframes' completion from the map included. A run whose result is not usable is not complete
+// either (summary.refused, with the reason): tracking lost on most frames (unless allow_lost),
+// a stage that failed on every frame or keyframe it was given (fusion, fill), an empty map.
+// report.json is the last file written: until the run has finished, the report on disk says
+// "complete": false, so a run killed at any moment never leaves one that says complete.
+//
+// Reproducible: for recorded input (a source that knows its frame count) every output but the
+// report's timings is the same on every run and every machine: the stages overlap in threads, but
+// what joins the map, and when, is fixed by the frame sequence (fusion_stage.h); a relocalisation
+// searches every keyframe before it. Live input may drop work to keep up.
 //
 // Usage (as BAD SLAM's and COLMAP's controllers):
 //   gf::Reconstruction reconstruction(options);
@@ -53,6 +66,9 @@ struct ReconstructionOptions {
   FusionStageOptions fusion_options;
   bool loop_closure = true;  // loop closure, pose graph and relocalisation
   LoopStageOptions loop_options;
+  // Accept a run that loses tracking on more than kMostFramesLost of its frames (a warning);
+  // without it such a run is refused (its trajectory is not usable).
+  bool allow_lost = false;
   // The file an implausible depth scale is blamed on (the camera.json in use); "" = the input.
   std::string camera_file;
   // Written into the report (config.file, input.path), not read.
@@ -75,6 +91,10 @@ struct ReconstructionCallbacks {
   std::function<void(const ReconstructionProgress&)> progress;
   // Asked as often: a non-empty reason stops the run (e.g. "interrupted by SIGINT").
   std::function<std::string()> stop;
+  // Once a complete run's other outputs are written, before its report.json (the last file):
+  // outputs made from the finished run (a mesh, report.html), given the report about to be
+  // written. What it throws becomes a warning in that report.
+  std::function<void(const nlohmann::ordered_json& report)> finish;
 };
 
 // A run that loses tracking on more than this share of its frames has no usable trajectory.
@@ -83,6 +103,9 @@ constexpr double kMostFramesLost = 0.5;
 struct ReconstructionSummary {
   bool complete = false;
   std::string stopped_because;  // when not complete
+  std::string stopped_during;   // ... the phase: tracking, fill, loop closure, fusion, ...
+  // Not complete because the result is not usable (stopped_because says why), rather than stopped.
+  bool refused = false;
   int frames = 0;
   int lost = 0;
   int keyframes = 0;
@@ -119,13 +142,21 @@ class Reconstruction {
   ReconstructionSummary Summarise(const FrameSource& source, const Stages& s,
                                   const std::exception_ptr& error, const std::string& stop_reason,
                                   double seconds) const;
+  // A run that finished but whose result is not usable: refused, with the reason.
+  void RefuseIfUnusable(const Stages& s, ReconstructionSummary* summary) const;
+  // The trajectory and, until the run has finished, a report that says it has not.
   void WriteOutputs(const Stages& s, RunSink* sink, RunSink* without_fill,
-                    ReconstructionSummary* summary) const;
+                    const ReconstructionSummary& summary) const;
   // After a complete run's outputs are written: each keyframe completed from the final map
-  // (FusionStageOptions::complete_keyframes), then report.json written again with
-  // fill.model_completion. `stop` (true) leaves the keyframes not yet completed as they are.
+  // (FusionStageOptions::complete_keyframes), recorded in the report's fill.model_completion.
+  // `stop` (true) leaves the keyframes not yet completed as they are: the run is then not
+  // complete.
   void CompleteKeyframes(const Stages& s, RunSink* sink, const std::function<bool()>& stop,
-                         ReconstructionSummary* summary) const;
+                         const std::string& stop_reason, ReconstructionSummary* summary) const;
+  // The finish callback (complete runs), then report.json: the without-fill folder's, and the
+  // run's last of all.
+  void WriteFinalReports(const ReconstructionCallbacks& callbacks, RunSink* sink,
+                         RunSink* without_fill, ReconstructionSummary* summary) const;
   ReconstructionOptions options_;
 };
 

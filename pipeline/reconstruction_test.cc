@@ -5,11 +5,16 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <atomic>
+#include <chrono>
+#include <mutex>
 #include <opencv2/imgproc.hpp>
+#include <thread>
 
 #include "acquisition/errors.h"
 #include "acquisition/trajectory_metrics.h"
 #include "datasets/synth.h"
+#include "tests/same_run.h"
 
 namespace gf {
 namespace {
@@ -191,6 +196,52 @@ TEST(Reconstruction, TheMapCompletesEachKeyframeFromItsFills) {
   EXPECT_FALSE(record["stopped"].get<bool>());
 }
 
+// A sink whose keyframe writes take `delay`: the fill stage falls far behind tracking and fusion.
+class SlowKeyframeSink : public InMemoryRunSink {
+ public:
+  explicit SlowKeyframeSink(std::chrono::milliseconds delay) : delay_(delay) {}
+  void WriteKeyframe(const std::string& name, const RgbdFrame& frame,
+                     const CarriedFillResult& fill) override {
+    std::this_thread::sleep_for(delay_);
+    InMemoryRunSink::WriteKeyframe(name, frame, fill);
+  }
+
+ private:
+  std::chrono::milliseconds delay_;
+};
+
+// A source whose frames take `delay` to read: tracking falls behind the fill and fusion.
+class SlowSource : public InMemoryFrameSource {
+ public:
+  SlowSource(CameraFile camera, std::vector<RgbdFrame> frames, std::chrono::milliseconds delay)
+      : InMemoryFrameSource(std::move(camera), std::move(frames)), delay_(delay) {}
+  bool Next(RgbdFrame* frame) override {
+    std::this_thread::sleep_for(delay_);
+    return InMemoryFrameSource::Next(frame);
+  }
+
+ private:
+  std::chrono::milliseconds delay_;
+};
+
+// A recorded capture gives the same outputs on every run, however fast each stage happens to be:
+// fills and loop corrections join the map at fixed points of the frame sequence. One run with
+// the fill held back (each keyframe's write 300 ms late), one with tracking held back (each
+// frame read 150 ms late), every output compared value for value.
+TEST(Reconstruction, ARecordedCaptureGivesTheSameOutputsHoweverFastEachStageRuns) {
+  const Capture& c = GlassTable();
+  SlowSource slow_source(c.camera, c.frames, std::chrono::milliseconds(150));
+  InMemoryRunSink first;
+  const ReconstructionSummary a = Reconstruction({}).Run(slow_source, &first);
+  InMemoryFrameSource source(c.camera, c.frames);
+  SlowKeyframeSink second(std::chrono::milliseconds(300));
+  const ReconstructionSummary b = Reconstruction({}).Run(source, &second);
+  ASSERT_TRUE(a.complete && b.complete);
+  EXPECT_GT(a.filled_pixels, 0);
+  EXPECT_GT(first.report["fill"]["model_completion"]["pixels"].get<long>(), 0);
+  testing::ExpectSameRun(first, second);
+}
+
 // A keyframe the fill cannot take (its colour has an alpha channel, which the stereo refuses) is
 // skipped and reported; tracking and the other keyframes' fills go on.
 TEST(Reconstruction, AFillFailureIsContained) {
@@ -257,6 +308,152 @@ TEST(Reconstruction, AStopRequestEndsTheRunEarly) {
   const auto& fill = sink.report["fill"];
   EXPECT_LE(fill["keyframes_filled"].get<int>() + fill["keyframes_not_filled"].get<int>(),
             s.keyframes);
+}
+
+// A sink that records the order of what is written, and the "complete" of every report.
+class RecordingSink : public InMemoryRunSink {
+ public:
+  void WriteKeyframe(const std::string& name, const RgbdFrame& frame,
+                     const CarriedFillResult& fill) override {
+    Note("keyframe");
+    InMemoryRunSink::WriteKeyframe(name, frame, fill);
+  }
+  void WriteTrajectory(const Trajectory& trajectory) override {
+    Note("trajectory");
+    InMemoryRunSink::WriteTrajectory(trajectory);
+  }
+  void WriteReport(const nlohmann::ordered_json& report) override {
+    Note("report");
+    std::lock_guard<std::mutex> lock(mutex_);
+    reports_complete.push_back(report["complete"].get<bool>());
+    InMemoryRunSink::WriteReport(report);
+  }
+  void WriteMap(const std::vector<Surfel>& surfels) override {
+    Note("map");
+    InMemoryRunSink::WriteMap(surfels);
+  }
+  int CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) override {
+    Note("completion");
+    ++completed_calls;
+    return InMemoryRunSink::CompleteKeyframe(name, model_depth);
+  }
+  std::vector<std::string> order;
+  std::vector<bool> reports_complete;
+  std::atomic<int> completed_calls{0};
+
+ private:
+  void Note(const std::string& what) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    order.push_back(what);
+  }
+  std::mutex mutex_;
+};
+
+// The capture's first n frames (sharing their pixels with it: replace an image, never write to it).
+std::vector<RgbdFrame> FirstFrames(int n) {
+  const Capture& c = GlassTable();
+  return std::vector<RgbdFrame>(c.frames.begin(), c.frames.begin() + n);
+}
+
+// report.json is the last file written, and until then the report says the run is not complete;
+// the finish callback runs before the last report, which carries what it threw as a warning.
+TEST(Reconstruction, TheReportIsWrittenLastAndSaysCompleteOnlyThen) {
+  InMemoryFrameSource source(GlassTable().camera, FirstFrames(12));
+  RecordingSink sink;
+  ReconstructionCallbacks callbacks;
+  bool finished = false;
+  callbacks.finish = [&](const nlohmann::ordered_json& report) {
+    EXPECT_TRUE(report["complete"].get<bool>());
+    EXPECT_GT(sink.completed_calls.load(), 0);  // after the completion from the map
+    finished = true;
+    throw std::runtime_error("report.html not written: a test");
+  };
+  const ReconstructionSummary s = Reconstruction({}).Run(source, &sink, callbacks);
+  ASSERT_TRUE(s.complete);
+  EXPECT_TRUE(finished);
+  ASSERT_FALSE(sink.order.empty());
+  EXPECT_EQ(sink.order.back(), "report");
+  ASSERT_GE(sink.reports_complete.size(), 2u);
+  for (size_t i = 0; i + 1 < sink.reports_complete.size(); ++i)
+    EXPECT_FALSE(sink.reports_complete[i]) << "report " << i << " said complete too early";
+  EXPECT_TRUE(sink.reports_complete.back());
+  EXPECT_EQ(sink.report["warnings"].back(), "report.html not written: a test");
+}
+
+// A stop request while the keyframes are being completed from the map: not complete, and the
+// report says it stopped during the completion.
+TEST(Reconstruction, AStopDuringTheMapCompletionLeavesTheRunIncomplete) {
+  InMemoryFrameSource source(GlassTable().camera, FirstFrames(12));
+  RecordingSink sink;
+  ReconstructionCallbacks callbacks;
+  callbacks.stop = [&]() -> std::string {
+    return sink.completed_calls >= 1 ? "stopped by the test" : "";
+  };
+  bool finished = false;
+  callbacks.finish = [&](const nlohmann::ordered_json&) { finished = true; };
+  const ReconstructionSummary s = Reconstruction({}).Run(source, &sink, callbacks);
+  EXPECT_FALSE(s.complete);
+  EXPECT_FALSE(s.refused);
+  EXPECT_FALSE(finished);
+  EXPECT_EQ(s.stopped_because, "stopped by the test");
+  EXPECT_EQ(s.stopped_during.rfind("map completion", 0), 0u) << s.stopped_during;
+  EXPECT_FALSE(sink.report["complete"].get<bool>());
+  EXPECT_EQ(sink.report["stopped_during"], s.stopped_during);
+  EXPECT_TRUE(sink.report["fill"]["model_completion"]["stopped"].get<bool>());
+  for (bool complete : sink.reports_complete) EXPECT_FALSE(complete);
+}
+
+// Runs whose result is not usable are refused: not complete, with the reason. Tracking lost on
+// most frames (accepted with allow_lost):
+TEST(Reconstruction, ARunThatLosesTrackingIsRefusedUnlessAllowed) {
+  std::vector<RgbdFrame> blind = FirstFrames(8);
+  for (RgbdFrame& f : blind) {
+    f.depth = cv::Mat(f.depth.size(), CV_32FC1, cv::Scalar(0));  // (= Mat::zeros would write
+                                                                  // into the shared pixels)
+    f.hole_mask = cv::Mat(f.hole_mask.size(), CV_8UC1, cv::Scalar(1));
+  }
+  ReconstructionOptions options;
+  options.fill = false;
+  options.fusion = false;
+  InMemoryFrameSource source(GlassTable().camera, blind);
+  InMemoryRunSink sink;
+  const ReconstructionSummary s = Reconstruction(options).Run(source, &sink);
+  EXPECT_TRUE(s.refused && !s.complete);
+  EXPECT_NE(s.stopped_because.find("tracking was lost on 7 of 8 frames"), std::string::npos)
+      << s.stopped_because;
+  EXPECT_FALSE(sink.report["complete"].get<bool>());
+  options.allow_lost = true;  // accepted, with a warning
+  InMemoryFrameSource again(GlassTable().camera, blind);
+  EXPECT_TRUE(Reconstruction(options).Run(again, &sink).complete);
+}
+
+// ... an empty map (here: the map keeps nothing farther than 0.31 m; the scene is 1-3 m away):
+TEST(Reconstruction, AnEmptyMapIsRefused) {
+  ReconstructionOptions options;
+  options.fill = false;
+  options.fusion_options.fusion.max_depth_m = 0.31;
+  InMemoryFrameSource source(GlassTable().camera, FirstFrames(8));
+  InMemoryRunSink sink;
+  const ReconstructionSummary s = Reconstruction(options).Run(source, &sink);
+  EXPECT_TRUE(s.refused && !s.complete);
+  EXPECT_NE(s.stopped_because.find("the map is empty"), std::string::npos) << s.stopped_because;
+}
+
+// ... a fill that failed on every keyframe (their colour has an alpha channel, which the stereo
+// refuses):
+TEST(Reconstruction, AFillThatFailsOnEveryKeyframeIsRefused) {
+  std::vector<RgbdFrame> frames = FirstFrames(8);
+  for (RgbdFrame& f : frames) {
+    cv::Mat bgra;  // a new image: the frames share their pixels with the capture's
+    cv::cvtColor(f.color, bgra, cv::COLOR_BGR2BGRA);
+    f.color = bgra;
+  }
+  InMemoryFrameSource source(GlassTable().camera, frames);
+  InMemoryRunSink sink;
+  const ReconstructionSummary s = Reconstruction({}).Run(source, &sink);
+  EXPECT_TRUE(s.refused && !s.complete);
+  EXPECT_NE(s.stopped_because.find("the fill failed on every keyframe"), std::string::npos)
+      << s.stopped_because;
 }
 
 TEST(Reconstruction, RefusesBadOptions) {

@@ -130,7 +130,7 @@ void TrackStage::Track(const RgbdFrame& frame, FrameToKeyframeTracker* tracker) 
     return;
   }
   if (fusion_) {
-    fusion_->OfferFrame(placed, r.world_from_camera, keyframe);
+    fusion_->OfferFrame(placed, r.world_from_camera, keyframe, handed_);
     ++offered_to_fusion_;
   }
   record_.trajectory.push_back({frame.timestamp, frame.timestamp_text, r.world_from_camera});
@@ -145,7 +145,8 @@ void TrackStage::OfferKeyframe(const RgbdFrame& frame, const RgbdFrame& placed,
       throw InputError(frame.depth_path.empty() ? source_.Input() : frame.depth_path,
                        "the stereo fill needs colour images (or --no-fill)");
     const bool moved = !r.depth_at_stamp.empty();  // then placed.depth is its own copy
-    fill_->Offer(placed, r.world_from_camera, keyframe, moved ? frame.depth : cv::Mat());
+    handed_.fills +=
+        fill_->Offer(placed, r.world_from_camera, keyframe, moved ? frame.depth : cv::Mat());
   }
   if (!loop_) return;
   using Link = LoopKeyframeItem::Link;
@@ -173,7 +174,7 @@ void TrackStage::OfferKeyframe(const RgbdFrame& frame, const RgbdFrame& placed,
   }
   last_keyframe_ = keyframe;
   last_keyframe_pose_ = r.world_from_camera;
-  loop_->Offer(std::move(item));
+  handed_.loops += loop_->Offer(std::move(item));
 }
 
 void TrackStage::CheckDepthScale(const RgbdFrame& frame) {

@@ -109,6 +109,7 @@ class TrackStage {
   std::atomic<bool> stop_{false};
   std::atomic<int> frames_{0};
   int offered_to_fusion_ = 0;  // frames handed to the fusion stage
+  SequencePoint handed_;       // keyframes handed to the fill and loop stages so far
   TrackingRecord record_;
   StageThread thread_;
 };
