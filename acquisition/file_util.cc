@@ -68,10 +68,14 @@ std::string StageFolder(const std::string& out_dir) {
   // Beside the final folder, so the rename stays on one file system.
   fs::path out = fs::absolute(out_dir).lexically_normal();
   if (out.filename().empty()) out = out.parent_path();
-  const std::string staging = out.string() + ".partial-" + std::to_string(::getpid());
-  fs::remove_all(staging, ec);
-  fs::create_directories(staging, ec);
+  fs::create_directories(out.parent_path(), ec);
   if (ec) throw InputError(out_dir, "cannot create output folder: " + ec.message());
+  const std::string base = out.string() + ".partial-" + std::to_string(::getpid());
+  std::string staging = base;
+  for (int n = 2; !fs::create_directory(staging, ec); ++n) {  // false: the name is taken
+    if (ec) throw InputError(out_dir, "cannot create output folder: " + ec.message());
+    staging = base + "-" + std::to_string(n);
+  }
   return staging;
 }
 

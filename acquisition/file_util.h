@@ -19,9 +19,12 @@ void WriteFileAtomically(const std::string& path,
                          const std::function<void(const std::string& temporary_path)>& write);
 void WriteTextFileAtomically(const std::string& path, const std::string& content);
 
-// Output folders that appear only when complete: StageFolder checks that out_dir does not exist or
-// is an empty folder (InputError otherwise) and returns a fresh, empty "<out_dir>.partial-<pid>"
-// beside it; PublishFolder renames the finished staging folder to out_dir.
+// Output folders that appear only when complete (capture, synth, colmap-export): StageFolder
+// checks that out_dir does not exist or is an empty folder (InputError otherwise) and creates a
+// fresh, empty "<out_dir>.partial-<pid>" beside it (with a further "-<n>" when that name is taken:
+// it never reuses, nor empties, a folder that is already there); PublishFolder renames the
+// finished staging folder to out_dir, replacing at most the empty folder. Neither ever replaces
+// outputs: folders written in place and replaced with --force are RunFolders (run_folder.h).
 std::string StageFolder(const std::string& out_dir);
 void PublishFolder(const std::string& staging_dir, const std::string& out_dir);
 

@@ -13,7 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <map>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -38,28 +38,81 @@ std::string Absolute(const fs::path& path, const fs::path& base) {
   return fs::weakly_canonical(path.is_absolute() ? path : base / path).string();
 }
 
-// A folder name per capture, unique within the batch.
-std::string UniqueName(const std::string& input, std::map<std::string, int>* used) {
-  std::string name = fs::path(input).filename().string();
-  if (name.empty() || name == "." || name == "..") name = "capture";
-  const int n = ++(*used)[name];
-  return n == 1 ? name : name + "_" + std::to_string(n);
+// A folder name per capture, unique within the batch (batch.h, Names).
+std::string UniqueName(const std::string& input, std::set<std::string>* taken) {
+  fs::path path(input);
+  if (path.filename().empty()) path = path.parent_path();  // "cap/"
+  std::string base = path.filename().string();
+  if (base.empty() || base == "." || base == "..") base = "capture";
+  static const std::set<std::string> kOurs = {
+      "batch",        "summary.csv",          "summary.html",
+      "batch.sbatch", RunFolder::kMarkerName, RunFolder::kLockName};
+  std::string name = base;
+  for (int n = 2; taken->count(name) || kOurs.count(name); ++n)
+    name = base + "_" + std::to_string(n);
+  taken->insert(name);
+  return name;
 }
 
-// Whether DIR/<name> holds a complete comparison made with the same settings.
-bool AlreadyDone(const std::string& out_dir, const BatchCapture& c) {
+// Whether DIR/<name> holds a complete comparison made with the same settings and input.
+bool AlreadyDone(const std::string& out_dir, const BatchCapture& c,
+                 const std::string& fingerprint) {
   const fs::path run = fs::path(out_dir) / c.name;
   const json state = ReadJsonIfAny((StateDir(out_dir) / (c.name + ".json")).string());
   const json report = ReadJsonIfAny((run / "with_fill" / "report.json").string());
   return IsRegularFile((run / "compare.json").string()) && state.is_object() &&
-         state.value("status", "") == "done" &&
-         state.value("fingerprint", "") == SettingsFingerprint(c) && report.is_object() &&
-         report.value("complete", false);
+         state.value("status", "") == "done" && state.value("fingerprint", "") == fingerprint &&
+         report.is_object() && report.value("complete", false);
+}
+
+// 64-bit FNV-1a: the same digits on every build and machine (std::hash promises neither).
+struct Fnv {
+  uint64_t hash = 1469598103934665603ull;
+  void Add(const std::string& text) {
+    for (unsigned char c : text) hash = (hash ^ c) * 1099511628211ull;
+    hash = (hash ^ 0xff) * 1099511628211ull;  // a separator: "ab","c" differs from "a","bc"
+  }
+};
+
+// A file's size and modification time (nanoseconds), as text.
+std::string SizeAndTime(const fs::path& file) {
+  std::error_code ec;
+  const auto size = fs::file_size(file, ec);
+  const auto time = fs::last_write_time(file, ec).time_since_epoch().count();
+  return ec ? "unreadable" : std::to_string(size) + " " + std::to_string(time);
+}
+
+// The capture's contents into `fnv`: a file's size and time; a folder's files by relative path
+// (sorted), with size and time, and the text of its .txt and .json files up to 1 MB (the index
+// files: rgb.txt, depth.txt, INDEX.txt, camera.json, ...).
+void AddContents(const std::string& input, Fnv* fnv) {
+  std::error_code ec;
+  if (fs::is_regular_file(input, ec)) return fnv->Add("file " + SizeAndTime(input));
+  if (!fs::is_directory(input, ec)) return fnv->Add("missing");
+  std::vector<fs::path> files;
+  for (auto it = fs::recursive_directory_iterator(
+           input, fs::directory_options::skip_permission_denied, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
+    if (it->is_regular_file(ec)) files.push_back(it->path());
+  if (ec) fnv->Add("unlistable " + ec.message());
+  std::sort(files.begin(), files.end());
+  for (const fs::path& f : files) {
+    fnv->Add(f.lexically_relative(input).generic_string() + " " + SizeAndTime(f));
+    const std::string ext = f.extension().string();
+    if (ext != ".txt" && ext != ".json") continue;
+    if (fs::file_size(f, ec) > (1u << 20) || ec) continue;
+    try {
+      fnv->Add(ReadTextFile(f.string()));
+    } catch (const InputError&) {
+      fnv->Add("unreadable");
+    }
+  }
 }
 
 // Starts `glassfusion compare` for a capture, its output appended to `log`. Returns the pid.
 pid_t Launch(const std::string& self, const BatchCapture& c, const std::string& out_dir,
              const std::string& log) {
+  // The child replaces (--force) only what its own earlier run in DIR/<name> listed.
   std::vector<std::string> args = {
       self, "compare", c.input, "--out", (fs::path(out_dir) / c.name).string(), "--force"};
   if (!c.config_file.empty()) args.insert(args.end(), {"--config", c.config_file});
@@ -88,6 +141,7 @@ std::string LastError(const std::string& log) {
 
 struct Running {
   BatchCapture capture;
+  std::string fingerprint;  // taken before the first attempt
   pid_t pid = 0;
   int attempt = 1;
   Clock::time_point start;
@@ -95,12 +149,11 @@ struct Running {
 
 // Runs `todo` with at most `jobs` children at once; calls `finished(capture, ok, attempts,
 // seconds)` for each. A failed attempt is retried up to `retries` more times.
-void RunChildren(const BatchOptions& options, const std::vector<BatchCapture>& todo,
+void RunChildren(const BatchOptions& options, RunFolder* out, const std::vector<Running>& todo,
                  const std::function<void(const Running&, bool, double)>& finished) {
   const std::string self = ExecutablePath();
   std::vector<Running> running;
-  std::vector<Running> queue;
-  for (const BatchCapture& c : todo) queue.push_back({c, 0, 1, {}});
+  std::vector<Running> queue = todo;
   std::reverse(queue.begin(), queue.end());  // pop_back takes them in manifest order
   auto stopping = [&] { return options.interrupt && options.interrupt->load() != 0; };
   bool forwarded = false;
@@ -109,8 +162,8 @@ void RunChildren(const BatchOptions& options, const std::vector<BatchCapture>& t
       Running r = queue.back();
       queue.pop_back();
       r.start = Clock::now();
-      r.pid = Launch(self, r.capture, options.out_dir,
-                     (StateDir(options.out_dir) / (r.capture.name + ".log")).string());
+      r.pid =
+          Launch(self, r.capture, options.out_dir, out->File("batch/" + r.capture.name + ".log"));
       running.push_back(r);
     }
     if (stopping() && !forwarded) {  // stop: no new captures; the running ones stop too
@@ -135,7 +188,8 @@ void RunChildren(const BatchOptions& options, const std::vector<BatchCapture>& t
       const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
       const double seconds = std::chrono::duration<double>(Clock::now() - r.start).count();
       if (!ok && r.attempt <= options.retries && !stopping()) {
-        queue.push_back({r.capture, 0, r.attempt + 1, {}});
+        r.attempt += 1;
+        queue.push_back(r);
       } else {
         finished(r, ok, seconds);
       }
@@ -144,19 +198,18 @@ void RunChildren(const BatchOptions& options, const std::vector<BatchCapture>& t
   }
 }
 
-void WriteState(const std::string& out_dir, const Running& r, bool ok, double seconds) {
-  const std::string log = (StateDir(out_dir) / (r.capture.name + ".log")).string();
+void WriteState(RunFolder* out, const Running& r, bool ok, double seconds) {
+  const std::string log = (StateDir(out->dir()) / (r.capture.name + ".log")).string();
   const json state = {{"name", r.capture.name},
                       {"input", r.capture.input},
                       {"config", r.capture.config_file},
                       {"status", ok ? "done" : "failed"},
                       {"attempts", r.attempt},
                       {"seconds", seconds},
-                      {"fingerprint", SettingsFingerprint(r.capture)},
+                      {"fingerprint", r.fingerprint},
                       {"error", ok ? json() : json(LastError(log))},
                       {"log", fs::path(log).filename().string()}};
-  WriteTextFileAtomically((StateDir(out_dir) / (r.capture.name + ".json")).string(),
-                          state.dump(2) + "\n");
+  WriteTextFileAtomically(out->File("batch/" + r.capture.name + ".json"), state.dump(2) + "\n");
 }
 
 }  // namespace
@@ -175,7 +228,7 @@ bool BatchOptions::Check(std::string* message) const {
 std::vector<BatchCapture> ReadManifest(const std::string& manifest,
                                        const std::string& default_config) {
   std::vector<BatchCapture> captures;
-  std::map<std::string, int> used;
+  std::set<std::string> used;
   const std::string config = default_config.empty() ? "" : Absolute(default_config, ".");
   if (IsDirectory(manifest)) {
     std::vector<std::string> inputs;
@@ -209,12 +262,24 @@ std::vector<BatchCapture> ReadManifest(const std::string& manifest,
   return captures;
 }
 
-void WriteBatchManifest(const std::string& out_dir, const std::vector<BatchCapture>& captures) {
+void WriteBatchManifest(RunFolder* out, const std::vector<BatchCapture>& captures) {
   json list = json::array();
   for (const BatchCapture& c : captures)
     list.push_back({{"name", c.name}, {"input", c.input}, {"config", c.config_file}});
-  WriteTextFileAtomically((StateDir(out_dir) / "manifest.json").string(),
+  WriteTextFileAtomically(out->File("batch/manifest.json"),
                           json({{"captures", list}}).dump(2) + "\n");
+}
+
+std::unique_ptr<RunFolder> OpenBatchFolder(const std::string& out_dir, const std::string& manifest,
+                                           const std::vector<BatchCapture>& captures, bool shared) {
+  RunFolder::Options options;
+  options.earlier = RunFolder::kKeep;
+  options.shared = shared;
+  if (IsDirectory(manifest)) options.inputs.push_back(manifest);  // its sub-folders are captures
+  for (const BatchCapture& c : captures) options.inputs.push_back(c.input);
+  auto folder = std::make_unique<RunFolder>(out_dir, options);
+  folder->Folder("batch");
+  return folder;
 }
 
 std::string ExecutablePath() {
@@ -234,11 +299,15 @@ json ReadJsonIfAny(const std::string& path) {
 }
 
 std::string SettingsFingerprint(const BatchCapture& c) {
-  std::string text = std::string("glassfusion ") + GF_VERSION + "\n" + c.input + "\n";
+  Fnv fnv;
+  fnv.Add(std::string("glassfusion ") + GF_VERSION);
+  fnv.Add(c.input);
   if (!c.config_file.empty())
-    text += IsRegularFile(c.config_file) ? ReadTextFile(c.config_file) : "missing " + c.config_file;
+    fnv.Add(IsRegularFile(c.config_file) ? ReadTextFile(c.config_file)
+                                         : "missing " + c.config_file);
+  AddContents(c.input, &fnv);
   char hex[17];
-  std::snprintf(hex, sizeof(hex), "%016zx", std::hash<std::string>{}(text));
+  std::snprintf(hex, sizeof(hex), "%016llx", static_cast<unsigned long long>(fnv.hash));
   return hex;
 }
 
@@ -249,23 +318,24 @@ BatchSummary RunBatch(const BatchOptions& options) {
   if (options.task >= static_cast<int>(captures.size()))
     throw InputError(options.manifest, "--task " + std::to_string(options.task) + ": it lists " +
                                            std::to_string(captures.size()) + " captures");
-  std::error_code ec;
-  fs::create_directories(StateDir(options.out_dir), ec);
-  if (ec) throw InputError(options.out_dir, "cannot create output folder: " + ec.message());
-  if (options.task < 0) WriteBatchManifest(options.out_dir, captures);
-  std::vector<BatchCapture> todo;
+  // The tasks of one Slurm job array share DIR; a whole batch has it to itself.
+  const std::unique_ptr<RunFolder> out =
+      OpenBatchFolder(options.out_dir, options.manifest, captures, options.task >= 0);
+  if (options.task < 0) WriteBatchManifest(out.get(), captures);
+  std::vector<Running> todo;
   int skipped = 0;
   for (int i = 0; i < static_cast<int>(captures.size()); ++i) {
     if (options.task >= 0 && i != options.task) continue;
-    if (AlreadyDone(options.out_dir, captures[i]))
+    const std::string fingerprint = SettingsFingerprint(captures[i]);
+    if (AlreadyDone(options.out_dir, captures[i], fingerprint))
       ++skipped;
     else
-      todo.push_back(captures[i]);
+      todo.push_back({captures[i], fingerprint, 0, 1, {}});
   }
   TerminalProgress progress("batch", static_cast<int>(todo.size()));
   int finished = 0;
-  RunChildren(options, todo, [&](const Running& r, bool ok, double seconds) {
-    WriteState(options.out_dir, r, ok, seconds);
+  RunChildren(options, out.get(), todo, [&](const Running& r, bool ok, double seconds) {
+    WriteState(out.get(), r, ok, seconds);
     progress.Update(++finished, r.capture.name + (ok ? " done" : " failed"));
   });
   progress.Finish();
@@ -274,7 +344,7 @@ BatchSummary RunBatch(const BatchOptions& options) {
     s.captures = 1, s.skipped = skipped, s.done = finished;
     return s;
   }
-  BatchSummary s = CollectBatch(options.out_dir);
+  BatchSummary s = WriteBatchSummary(out.get());
   s.skipped = skipped;
   if (options.interrupt && *options.interrupt)
     throw Interrupted(*options.interrupt,

@@ -17,8 +17,10 @@ void AddBatchCommand(CLI::App& app) {
       "DIR/summary.csv and DIR/summary.html; or write (and submit) a Slurm job array doing it");
   cmd->footer(
       "MANIFEST: a text file, one capture per line `PATH [--config FILE]`, or a folder whose "
-      "sub-folders are captures. A capture already complete with the same settings is skipped; "
-      "a failed one is retried once, then reported.\n"
+      "sub-folders are captures. Each runs in DIR/<its folder name>, made unique in manifest "
+      "order (x/cap, y/cap, z/cap_2 -> cap, cap_2, cap_2_2). A capture already complete with the "
+      "same settings and the same files (sizes, times, index files' text) is skipped; a failed "
+      "one is retried once, then reported. One batch at a time into DIR.\n"
       "Example: glassfusion batch shelf/ --out batch-out --jobs 1\n"
       "         glassfusion batch list.txt --out /shared/out --slurm --submit\n"
       "         glassfusion batch --collect /shared/out\n"

@@ -77,7 +77,7 @@ std::string CsvField(const std::string& text) {
   return quoted + "\"";
 }
 
-void WriteSummary(const std::string& out_dir, const std::vector<Row>& rows, const BatchSummary& s) {
+void WriteSummary(RunFolder* out, const std::vector<Row>& rows, const BatchSummary& s) {
   std::string csv =
       "name,status,frames,seconds,ate_m,surfels_with_fill,surfels_without_fill,"
       "completeness_gain,fill_rate,report,error\n";
@@ -97,8 +97,8 @@ void WriteSummary(const std::string& out_dir, const std::vector<Row>& rows, cons
     frames += r.frames.empty() ? 0 : std::stol(r.frames);
     seconds += r.seconds.empty() ? 0 : std::stod(r.seconds);
   }
-  WriteTextFileAtomically((fs::path(out_dir) / "summary.csv").string(), csv);
-  HtmlReport html("GlassFusion batch: " + fs::path(out_dir).filename().string());
+  WriteTextFileAtomically(out->File("summary.csv"), csv);
+  HtmlReport html("GlassFusion batch: " + fs::path(out->dir()).filename().string());
   html.Paragraph(s.BriefReport() + "; " + std::to_string(frames) + " frames in " +
                  Fixed(seconds / 60, 1) +
                  " minutes of processing. Each capture was tracked once "
@@ -111,7 +111,7 @@ void WriteSummary(const std::string& out_dir, const std::vector<Row>& rows, cons
   html.LinkedTable({"capture", "status", "frames", "seconds", "ATE m", "surfels with fill",
                     "without", "gain", "fill rate", "report or error"},
                    table, links);
-  WriteTextFileAtomically((fs::path(out_dir) / "summary.html").string(), html.Html());
+  WriteTextFileAtomically(out->File("summary.html"), html.Html());
 }
 
 }  // namespace
@@ -123,6 +123,18 @@ std::string BatchSummary::BriefReport() const {
 }
 
 BatchSummary CollectBatch(const std::string& out_dir) {
+  const fs::path manifest = fs::path(out_dir) / "batch" / "manifest.json";
+  if (!IsRegularFile(manifest.string()))  // before the lock: no marker in a folder not a batch's
+    throw InputError(manifest.string(), "missing or unreadable: is this a batch folder?");
+  RunFolder::Options options;
+  options.earlier = RunFolder::kKeep;
+  options.shared = true;  // beside the tasks of a job array still running
+  RunFolder out(out_dir, options);
+  return WriteBatchSummary(&out);
+}
+
+BatchSummary WriteBatchSummary(RunFolder* out) {
+  const std::string& out_dir = out->dir();
   const fs::path manifest = fs::path(out_dir) / "batch" / "manifest.json";
   const json list = ReadJsonIfAny(manifest.string());
   if (!list.is_object() || !list["captures"].is_array())
@@ -137,7 +149,7 @@ BatchSummary CollectBatch(const std::string& out_dir) {
     s.failed += status == "failed";
     s.pending += status == "pending";
   }
-  WriteSummary(out_dir, rows, s);
+  WriteSummary(out, rows, s);
   return s;
 }
 
@@ -146,10 +158,8 @@ std::string WriteSlurmScript(const BatchOptions& options) {
   if (!options.Check(&problem)) throw InputError("batch", problem);
   const std::vector<BatchCapture> captures = ReadManifest(options.manifest, options.config_file);
   const std::string dir = fs::absolute(options.out_dir).string();
-  std::error_code ec;
-  fs::create_directories(fs::path(dir) / "batch", ec);
-  if (ec) throw InputError(dir, "cannot create output folder: " + ec.message());
-  WriteBatchManifest(dir, captures);
+  const std::unique_ptr<RunFolder> out = OpenBatchFolder(dir, options.manifest, captures, false);
+  WriteBatchManifest(out.get(), captures);
   const std::string self = ExecutablePath();
   std::string array = "0-" + std::to_string(captures.size() - 1);
   if (options.slurm_max_running > 0) array += "%" + std::to_string(options.slurm_max_running);
@@ -180,8 +190,9 @@ std::string WriteSlurmScript(const BatchOptions& options) {
            ? ""
            : " --config '" + fs::absolute(options.config_file).string() + "'") +
       " --task \"$SLURM_ARRAY_TASK_ID\"\n";
-  const std::string path = (fs::path(dir) / "batch.sbatch").string();
+  const std::string path = out->File("batch.sbatch");
   WriteTextFileAtomically(path, script);
+  std::error_code ec;
   fs::permissions(path, fs::perms::owner_exec | fs::perms::group_exec, fs::perm_options::add, ec);
   return path;
 }

@@ -13,6 +13,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/run_folder.h"
 #include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
 #include "pipeline/run_sink.h"
@@ -104,6 +105,10 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
   if (!IsDirectory(workspace)) throw InputError(workspace, "no such COLMAP workspace");
   const CameraFile run_camera = LoadCameraFile((fs::path(run_dir) / "camera.json").string());
   const Camera& camera = run_camera.camera;
+  // Adds to the run: locked against a run writing it, what it adds listed in its marker.
+  RunFolder::Options folder_options;
+  folder_options.earlier = RunFolder::kKeep;  // the workspace may well lie inside the run
+  RunFolder run(run_dir, folder_options);
   ColmapImportSummary summary;
   nlohmann::ordered_json report;
 
@@ -126,7 +131,7 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
     }
     std::sort(refined.begin(), refined.end(),
               [](const StampedPose& a, const StampedPose& b) { return a.timestamp < b.timestamp; });
-    WriteTumTrajectory((fs::path(run_dir) / "trajectory_colmap.txt").string(), refined);
+    WriteTumTrajectory(run.File("trajectory_colmap.txt"), refined);
     summary.poses = static_cast<int>(refined.size());
     report["model"] = model_dir;
   }
@@ -204,7 +209,7 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
             filled.at<uint16_t>(y, x) = static_cast<uint16_t>(std::min(65535.f, z * 1000.f + 0.5f));
             ++added;
           }
-        WriteImage(filled_path.string(), filled);
+        WriteImage(run.File("keyframes/" + ts + ".depth_filled.png"), filled);
         ++summary.depth_maps_used;
         summary.filled_pixels += added;
       }
@@ -222,8 +227,7 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
   report["poses"] = summary.poses;
   report["depth_maps"] = maps;
   report["filled_pixels"] = summary.filled_pixels;
-  WriteTextFileAtomically((fs::path(run_dir) / "colmap_import.json").string(),
-                          report.dump(2) + "\n");
+  WriteTextFileAtomically(run.File("colmap_import.json"), report.dump(2) + "\n");
   return summary;
 }
 

@@ -4,8 +4,8 @@
 // keyframes' colour images; names sort in keyframe order, so `colmap feature_extractor` gives
 // them the image ids of the model) and WS/sparse/0/{cameras,images,points3D}.txt, COLMAP's usual
 // layout, with the tracked keyframe poses (one FULL_OPENCV camera carrying the input's lens
-// distortion, as the images are the input's own; no points: `colmap point_triangulator` makes them).
-// The workspace folder appears only when complete.
+// distortion, as the images are the input's own; no points: `colmap point_triangulator` makes
+// them). The workspace folder appears only when complete.
 //
 // Import reads back what COLMAP made:
 //  - refined poses: a text model (default WS/refined, e.g. after point_triangulator +
@@ -17,7 +17,9 @@
 //    the stereo fill left empty in keyframes/<ts>.depth_filled.png. A map is used only where it
 //    agrees with the sensor on measured pixels (median relative error <= max_sensor_error);
 //    measured pixels are never changed.
-// A summary goes to RUN_DIR/colmap_import.json.
+// A summary goes to RUN_DIR/colmap_import.json. RUN_DIR must be a run folder (its marker
+// .glassfusion-run, acquisition/run_folder.h): import takes its lock and lists what it writes
+// there, so a later `reconstruct --force` removes it too.
 #pragma once
 
 #include <string>

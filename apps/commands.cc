@@ -150,8 +150,9 @@ void AddReconstructCommand(CLI::App& app) {
                   "config.settings; any part of it)");
   AddPrintConfig(cmd, &options->config_file, &options->pipeline);
   cmd->add_flag("--force", options->force,
-                "replace the earlier run in --out (without it, a folder that is not empty is "
-                "refused)");
+                "replace the earlier run in --out: remove only the files its marker "
+                ".glassfusion-run lists (without it, a folder that is not empty is refused; a "
+                "folder without the marker, or the input, is never replaced)");
   cmd->add_flag("--allow-lost", options->allow_lost,
                 "accept a run that loses tracking on most frames (exit 0 with a warning)");
   cmd->callback([options, args, range, no_fill, no_fusion, no_loops, sweep_all] {
@@ -193,7 +194,9 @@ void AddCompareCommand(CLI::App& app) {
                   "frames A:B (A included, B excluded), A: from A, or N the first N");
   cmd->add_option("--config", options->config_file, "JSON file of settings, as for reconstruct");
   AddPrintConfig(cmd, &options->config_file, &options->pipeline);
-  cmd->add_flag("--force", options->force, "replace an earlier comparison in --out");
+  cmd->add_flag("--force", options->force,
+                "replace an earlier comparison in --out: remove only the files its marker "
+                ".glassfusion-run lists");
   cmd->add_flag("--allow-lost", options->allow_lost,
                 "accept a run that loses tracking on most frames");
   cmd->callback([options, args, range] {

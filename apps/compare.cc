@@ -11,6 +11,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/run_folder.h"
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
 #include "apps/report_html.h"
@@ -86,12 +87,11 @@ std::string Percent(const json& share) {
 
 // Both maps rendered from the same two viewpoints: the middle frame's, and looking down on the map
 // from above and behind that camera. Written as DIR/<map>_<view>.png.
-void WriteRenderings(const std::string& out_dir, const Camera& camera,
-                     const Trajectory& trajectory) {
+void WriteRenderings(RunFolder* out, const Camera& camera, const Trajectory& trajectory) {
   const std::vector<Surfel> with =
-      ReadSurfelPly((fs::path(out_dir) / "with_fill/map.ply").string());
+      ReadSurfelPly((fs::path(out->dir()) / "with_fill/map.ply").string());
   const std::vector<Surfel> without =
-      ReadSurfelPly((fs::path(out_dir) / "without_fill/map.ply").string());
+      ReadSurfelPly((fs::path(out->dir()) / "without_fill/map.ply").string());
   if (trajectory.empty() || with.empty()) return;
   const SE3 middle = trajectory[trajectory.size() / 2].world_from_camera;
   const Eigen::Matrix3d r = middle.RotationMatrix();
@@ -99,7 +99,7 @@ void WriteRenderings(const std::string& out_dir, const Camera& camera,
   for (const auto& [pose, view] : {std::pair{middle, "camera"}, std::pair{above, "above"}})
     for (const auto& [map, name] :
          {std::pair{&with, "with_fill"}, std::pair{&without, "without_fill"}})
-      WriteImage((fs::path(out_dir) / (std::string(name) + "_" + view + ".png")).string(),
+      WriteImage(out->File(std::string(name) + "_" + view + ".png"),
                  RenderSurfels(*map, camera, pose, {}).color);
 }
 
@@ -195,18 +195,13 @@ CompareSummary RunCompare(const ReconstructOptions& given) {
   if (!options.Check(&problem)) throw InputError(options.out_dir, "bad options: " + problem);
   std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, options.source);
   const fs::path out(options.out_dir);
-  std::error_code ec;
-  if (fs::is_directory(out, ec) && !fs::is_empty(out, ec)) {
-    const bool earlier = fs::exists(out / "compare.json") || fs::exists(out / "with_fill");
-    if (!options.force || !earlier)
-      throw InputError(options.out_dir, earlier ? "holds an earlier comparison; --force replaces it"
-                                                : "is not empty and holds no comparison");
-    fs::remove_all(out, ec);
-  }
-  fs::create_directories(out, ec);
-  if (ec) throw InputError(options.out_dir, "cannot create output folder: " + ec.message());
-  FolderRunSink with((out / "with_fill").string(), false);
-  FolderRunSink without((out / "without_fill").string(), false);
+  // One marker and lock for the whole comparison: with_fill/ and without_fill/ are recorded in it.
+  RunFolder::Options folder_options;
+  folder_options.earlier = options.force ? RunFolder::kReplace : RunFolder::kRefuse;
+  folder_options.inputs = {options.input};
+  RunFolder folder(options.out_dir, folder_options);
+  FolderRunSink with(&folder, "with_fill");
+  FolderRunSink without(&folder, "without_fill");
   CompareSummary summary;
   summary.run = RunPipeline(options, source.get(), &with, &without, "compare");
   json& c = summary.compare;
@@ -221,12 +216,12 @@ CompareSummary RunCompare(const ReconstructOptions& given) {
     c[v]["accuracy"] = truth["accuracy"];
     c["ate_m"] = truth["ate_m"];
   }
-  WriteTextFileAtomically((out / "compare.json").string(), c.dump(2) + "\n");
-  WriteRenderings(options.out_dir, source->camera(),
+  WriteTextFileAtomically(folder.File("compare.json"), c.dump(2) + "\n");
+  WriteRenderings(&folder, source->camera(),
                   ReadTumTrajectory((out / "with_fill/trajectory.txt").string()));
   HtmlReport r("GlassFusion: the model with and without the stereo fill");
   AddComparisonSections(&r, options.out_dir, "");
-  WriteTextFileAtomically((out / "report.html").string(), r.Html());
+  WriteTextFileAtomically(folder.File("report.html"), r.Html());
   return summary;
 }
 

@@ -10,6 +10,9 @@
 // the true ones, AlignPoses: positions alone leave it undetermined when the camera moves along a
 // line, as in a 40-frame orbit).
 //
+// DIR is one RunFolder (acquisition/run_folder.h) for all of it: one marker lists the files of
+// both runs and the comparison's own, one lock keeps other runs out; --force removes only those.
+//
 // compare.json: {"with_fill": {...}, "without_fill": {...}}, each with "surfels" (report.json's)
 // and, with ground truth, "completeness" ({"overall", "per_material": {name: ...}}, each
 // {"within_1cm", "within_2cm"} as shares 0-1) and "accuracy" ({"median_m", "p90_m", and

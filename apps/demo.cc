@@ -10,6 +10,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/run_folder.h"
 #include "acquisition/stats.h"
 #include "apps/compare.h"
 #include "apps/info.h"
@@ -49,15 +50,6 @@ cv::Mat Overview(const RgbdFrame& frame) {
   cv::hconcat(std::vector<cv::Mat>{frame.color, depth_color, holes}, row);
   cv::resize(row, row, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
   return row;
-}
-
-// Removes a folder a previous demo wrote (recognised by `marker`); anything else in the way is not
-// ours to delete.
-void ReplaceOurs(const std::string& dir, const std::string& marker, const std::string& what) {
-  if (!fs::exists(dir)) return;
-  if (!IsRegularFile((fs::path(dir) / marker).string()))
-    throw InputError(dir, "exists and is not " + what);
-  fs::remove_all(dir);
 }
 
 constexpr int kMaterials = 5;
@@ -269,14 +261,15 @@ void RunDemo(const DemoOptions& options) {
   ReconstructOptions compare;
   compare.config_file = options.config_file;
   if (!options.config_file.empty()) ApplyConfigFile(options.config_file, &compare.pipeline);
-  std::error_code ec;
-  fs::create_directories(options.out_dir, ec);
-  if (ec) throw InputError(options.out_dir, "cannot create output folder: " + ec.message());
+  // An earlier demo's files go (only those its marker lists); compare/ is a run folder of its own,
+  // replaced by its own marker below.
+  RunFolder::Options folder_options;
+  folder_options.earlier = RunFolder::kReplace;
+  if (!options.data_dir.empty()) folder_options.inputs = {options.data_dir};
+  RunFolder folder(options.out_dir, folder_options);
   const fs::path out(options.out_dir);
   const std::string scene_dir = (out / "glass-table").string();
   const std::string compare_dir = (out / "compare").string();
-  ReplaceOurs(scene_dir, "synth.json", "a GlassFusion synthetic dataset");
-  ReplaceOurs(compare_dir, "compare.json", "a GlassFusion comparison");
 
   // 1. The built-in glass scene, read back as any capture is, its holes measured per material.
   synth::SynthOptions synth_options;
@@ -289,13 +282,15 @@ void RunDemo(const DemoOptions& options) {
     synth_summary = synth::GenerateDataset(synth_options, scene_dir,
                                            [&](int done, int) { progress.Update(done); });
   }
+  folder.RecordTree("glass-table");  // moved into place whole (StageFolder, PublishFolder)
   RgbdFrame first;
   const SensorHoles sensor = MeasureSensorHoles(scene_dir, &first);
-  WriteImage((out / "overview.png").string(), Overview(first));
+  WriteImage(folder.File("overview.png"), Overview(first));
 
   // 2. `compare` on it: tracked once, fused with and without the fill, both maps scored.
   compare.input = scene_dir;
   compare.out_dir = compare_dir;
+  compare.force = true;  // compare/'s own marker: only what the earlier demo's comparison wrote
   const CompareSummary c = RunCompare(compare);
   const FillScore fill = ScoreFill(scene_dir, (out / "compare/with_fill").string());
   std::string data_dir;
@@ -325,8 +320,8 @@ void RunDemo(const DemoOptions& options) {
   r.Heading("The model (glassfusion compare)");
   AddComparisonSections(&r, compare_dir, "compare/");
   AddDatasetSection(&r, data_dir, datasets);
-  WriteTextFileAtomically((out / "report.json").string(), report.dump(2) + "\n");
-  WriteTextFileAtomically((out / "report.html").string(), r.Html());
+  WriteTextFileAtomically(folder.File("report.json"), report.dump(2) + "\n");
+  WriteTextFileAtomically(folder.File("report.html"), r.Html());
   std::cout << "demo: glass-table " << synth_summary.BriefReport() << "; " << c.BriefReport()
             << "; report in " << (out / "report.html").string() << std::endl;
 }

@@ -11,6 +11,11 @@
 // trajectory against ground truth, fill overlays, timings, settings, links), and the holes of every
 // dataset folder found under --data. With a config file, the runs use its settings (and the report
 // lists them), so that a setting's effect on each material can be measured on the demo scene.
+//
+// OUT is a RunFolder (acquisition/run_folder.h) and OUT/compare a run folder of its own: a demo
+// run replaces the files an earlier demo listed in OUT's marker (and compare's in its own), never
+// anything else; a non-empty OUT without a marker is refused, and so is a second demo into the
+// same OUT while the first runs.
 #pragma once
 
 #include <string>

@@ -52,8 +52,8 @@ int FrameCountOf(const std::string& range, const std::string& command) {
   int first = 0, end = -1;
   ParseFrameRange(range, &first, &end);
   if (first != 0 || end < 0)
-    throw InputError("--frames", command + " starts at frame 0: give N or 0:N, not \"" + range +
-                                     "\"");
+    throw InputError("--frames",
+                     command + " starts at frame 0: give N or 0:N, not \"" + range + "\"");
   return end;
 }
 
@@ -109,20 +109,24 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
   if (!options.Check(&problem)) throw InputError(options.out_dir, "bad options: " + problem);
   // The input first: a bad input leaves no run folder behind.
   std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, options.source);
-  FolderRunSink sink(options.out_dir, options.force);
+  RunFolder::Options folder;
+  folder.earlier = options.force ? RunFolder::kReplace : RunFolder::kRefuse;
+  folder.inputs = {options.input};
+  FolderRunSink sink(options.out_dir, folder);
   // Before the final report.json: the mesh and the page (a failure of either is a warning in it).
   auto finish = [&](const nlohmann::ordered_json& report) {
     if (options.mesh && options.pipeline.fusion) {
       try {
-        const MeshSummary m =
-            WriteMapMesh(ReadSurfelPly((fs::path(options.out_dir) / "map.ply").string()),
-                         (fs::path(options.out_dir) / "mesh.ply").string(), {});
+        const MeshSummary m = WriteMapMesh(
+            ReadSurfelPly((fs::path(options.out_dir) / "map.ply").string()), sink.File("mesh.ply"),
+            {});
         spdlog::info("{}", m.BriefReport());
       } catch (const std::exception& e) {
         throw std::runtime_error(options.out_dir + "/mesh.ply not written: " + e.what());
       }
     }
     try {
+      sink.File("report.html");
       WriteRunReport(options.out_dir, options.input, report);
     } catch (const std::exception& e) {
       throw std::runtime_error(options.out_dir + "/report.html not written: " + e.what());

@@ -2,7 +2,9 @@
 // input path, into a run folder, with terminal progress and Ctrl-C.
 //
 // Outputs in DIR (pipeline/run_sink.h): trajectory.txt, camera.json, report.json, keyframes/.
-// DIR must be new or empty, or hold an earlier run and `force` be set. A run that must stop still
+// DIR is a RunFolder (acquisition/run_folder.h): it must be new or empty, or hold an earlier run
+// and `force` be set, which removes only the files that run's marker lists; it must not be, hold
+// or lie inside the input, and no other run may be writing it. A run that must stop still
 // writes what it processed with "complete": false (see reconstruction.h) and then throws:
 // InputError for bad input or an output that cannot be written, Interrupted for Ctrl-C/SIGTERM
 // (through `interrupt`). A run refused as not usable (tracking lost on most frames unless
@@ -28,7 +30,7 @@ struct ReconstructOptions {
   std::string config_file;  // --config FILE, applied (pipeline/settings.h); listed in report.json
   FrameSourceOptions source;
   ReconstructionOptions pipeline;  // frames, tracker, fill
-  bool force = false;              // --force: replace an earlier run in out_dir
+  bool force = false;              // --force: replace (only) the earlier run's files in out_dir
   bool allow_lost = false;         // --allow-lost: accept a run that loses tracking on most frames
   bool mesh = false;  // --mesh: also mesh.ply, a triangle mesh of the map (surfels/mesh.h)
   // Set (to the signal's number) by a signal handler to stop the run early; may be null.

@@ -35,11 +35,10 @@ std::string PoseName(const StampedPose& pose) {
                                      : pose.timestamp_text;
 }
 
-bool LooksLikeRun(const fs::path& dir) {
-  for (const char* name :
-       {"report.json", "trajectory.txt", "keyframes", "camera.json", "map.ply", "undistorted"})
-    if (fs::exists(dir / name)) return true;
-  return false;
+RunFolder::Options Earlier(bool replace) {
+  RunFolder::Options options;
+  options.earlier = replace ? RunFolder::kReplace : RunFolder::kRefuse;
+  return options;
 }
 
 }  // namespace
@@ -95,57 +94,45 @@ cv::Mat FillOverlay(const cv::Mat& color, const CarriedFillResult& fill) {
   return out;
 }
 
-FolderRunSink::FolderRunSink(std::string out_dir, bool replace) : out_dir_(std::move(out_dir)) {
-  std::error_code ec;
-  const fs::path dir(out_dir_);
-  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
-    throw InputError(out_dir_, "exists and is not a folder");
-  if (fs::is_directory(dir, ec) && !fs::is_empty(dir, ec)) {
-    if (!replace)
-      throw InputError(out_dir_,
-                       "is not empty (an earlier run?); choose a new folder, or --force to "
-                       "replace the run in it");
-    if (!LooksLikeRun(dir))
-      throw InputError(out_dir_,
-                       "is not empty and holds no run (no report.json, trajectory.txt or "
-                       "keyframes/); --force replaces only runs");
-    for (const auto& entry : fs::directory_iterator(dir, ec)) fs::remove_all(entry.path(), ec);
-    if (ec) throw InputError(out_dir_, "cannot remove the earlier run: " + ec.message());
-  }
-  fs::create_directories(dir, ec);
-  if (ec) throw InputError(out_dir_, "cannot create output folder: " + ec.message());
+FolderRunSink::FolderRunSink(const std::string& out_dir, const RunFolder::Options& options)
+    : owned_(std::make_unique<RunFolder>(out_dir, options)),
+      folder_(owned_.get()),
+      out_dir_(out_dir) {}
+
+FolderRunSink::FolderRunSink(const std::string& out_dir, bool replace)
+    : FolderRunSink(out_dir, Earlier(replace)) {}
+
+FolderRunSink::FolderRunSink(RunFolder* folder, const std::string& subfolder)
+    : folder_(folder), prefix_(subfolder + "/"), out_dir_(folder->Folder(subfolder)) {}
+
+std::string FolderRunSink::File(const std::string& relative) {
+  return folder_->File(prefix_ + relative);
 }
 
 void FolderRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& frame,
                                   const CarriedFillResult& fill) {
-  const fs::path folder = fs::path(out_dir_) / "keyframes";
-  std::error_code ec;
-  fs::create_directories(folder, ec);  // with the first keyframe: a run without fill has none
-  if (ec) throw InputError(folder.string(), "cannot create folder: " + ec.message());
-  const std::string base = (folder / name).string();
-  WriteImage(base + ".hole_mask.png", frame.hole_mask);
-  WriteImage(base + ".depth_filled.png", ToMillimetres(fill.filled_depth));
+  // keyframes/ comes with the first keyframe: a run without fill has none.
+  auto keyframe = [&](const char* suffix) { return File("keyframes/" + name + suffix); };
+  WriteImage(keyframe(".hole_mask.png"), frame.hole_mask);
+  WriteImage(keyframe(".depth_filled.png"), ToMillimetres(fill.filled_depth));
   if (fill.confidence.type() == CV_32FC1 && fill.fill_mask.type() == CV_8UC1) {
     // The fill's confidence on the filled pixels, 0-255 for 0-1; 0 elsewhere.
     cv::Mat confidence;
     fill.confidence.convertTo(confidence, CV_8U, 255.0);
     confidence.setTo(0, fill.fill_mask == 0);
-    WriteImage(base + ".fill_confidence.png", confidence);
+    WriteImage(keyframe(".fill_confidence.png"), confidence);
   }
   const bool has_color = frame.color.type() == CV_8UC3 && frame.color.size() == frame.depth.size();
   if (has_color) {
-    WriteImage(base + ".fill_overlay.png", FillOverlay(frame.color, fill));
-    WriteImage(base + ".color.png", frame.color);  // for colmap-export
+    WriteImage(keyframe(".fill_overlay.png"), FillOverlay(frame.color, fill));
+    WriteImage(keyframe(".color.png"), frame.color);  // for colmap-export
   }
   // The pinhole set (undistorted/), colour and depth under the same file name.
   const std::string file = IndexedFileName(frame.index, frame.timestamp_text);
-  const fs::path pinhole = fs::path(out_dir_) / "undistorted";
-  for (const char* sub : {"color", "depth"}) fs::create_directories(pinhole / sub, ec);
-  if (ec) throw InputError(pinhole.string(), "cannot create folder: " + ec.message());
-  WriteImage((pinhole / "depth" / file).string(),
+  WriteImage(File("undistorted/depth/" + file),
              Undistort(ToMillimetres(fill.filled_depth), cv::INTER_NEAREST));
   if (has_color)
-    WriteImage((pinhole / "color" / file).string(), Undistort(frame.color, cv::INTER_LINEAR));
+    WriteImage(File("undistorted/color/" + file), Undistort(frame.color, cv::INTER_LINEAR));
   std::lock_guard<std::mutex> lock(mutex_);
   keyframes_[frame.index] = {name, file};
 }
@@ -179,9 +166,8 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const cv::Mat& mode
   // depth_filled.png (what users and the figures read) last: when an earlier write fails it stays
   // as the keyframe's fill left it, and the warning says the keyframe was not completed.
   const cv::Mat completed_mm = ToMillimetres(filled);
-  WriteImage(base + ".model_fill.png", completed);
-  WriteImage((fs::path(out_dir_) / "undistorted" / "depth" / pinhole_file).string(),
-             Undistort(completed_mm, cv::INTER_NEAREST));
+  WriteImage(File("keyframes/" + name + ".model_fill.png"), completed);
+  WriteImage(File("undistorted/depth/" + pinhole_file), Undistort(completed_mm, cv::INTER_NEAREST));
   // The overlay shows the completed pixels orange (they were magenta: holes left empty).
   const cv::Mat color = cv::imread(base + ".color.png", cv::IMREAD_COLOR);
   cv::Mat overlay = cv::imread(base + ".fill_overlay.png", cv::IMREAD_COLOR);
@@ -190,14 +176,14 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const cv::Mat& mode
     cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(0, 165, 255)), 0.5, 0,
                     tinted);
     tinted.copyTo(overlay, completed);
-    WriteImage(base + ".fill_overlay.png", overlay);
+    WriteImage(File("keyframes/" + name + ".fill_overlay.png"), overlay);
   }
-  WriteImage(base + ".depth_filled.png", completed_mm);
+  WriteImage(File("keyframes/" + name + ".depth_filled.png"), completed_mm);
   return pixels;
 }
 
 void FolderRunSink::WriteTrajectory(const Trajectory& trajectory) {
-  WriteTumTrajectory((fs::path(out_dir_) / "trajectory.txt").string(), trajectory);
+  WriteTumTrajectory(File("trajectory.txt"), trajectory);
   std::map<std::string, SE3> poses;
   for (const StampedPose& p : trajectory) poses[PoseName(p)] = p.world_from_camera;
   Trajectory keyframes;  // undistorted/trajectory.log: entry k is the k-th file, by name
@@ -207,35 +193,30 @@ void FolderRunSink::WriteTrajectory(const Trajectory& trajectory) {
     if (pose == poses.end()) continue;  // a keyframe whose pose the run did not keep
     keyframes.push_back({static_cast<double>(keyframes.size()), "", pose->second});
   }
-  if (!keyframes.empty())
-    WriteRedwoodLog((fs::path(out_dir_) / "undistorted" / "trajectory.log").string(), keyframes);
+  if (!keyframes.empty()) WriteRedwoodLog(File("undistorted/trajectory.log"), keyframes);
 }
 
 void FolderRunSink::WriteCamera(const CameraFile& camera) {
-  SaveCameraFile((fs::path(out_dir_) / "camera.json").string(), camera);
+  SaveCameraFile(File("camera.json"), camera);
   undistort_x_ = undistort_y_ = cv::Mat();
   if (camera.camera.HasDistortion()) camera.camera.UndistortionMaps(&undistort_x_, &undistort_y_);
   CameraFile pinhole = camera;
   pinhole.camera.distortion = {0, 0, 0, 0, 0};
-  const fs::path dir = fs::path(out_dir_) / "undistorted";
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw InputError(dir.string(), "cannot create folder: " + ec.message());
-  SaveCameraFile((dir / "camera.json").string(), pinhole);
+  SaveCameraFile(File("undistorted/camera.json"), pinhole);
   const Camera& c = pinhole.camera;
   const nlohmann::ordered_json open3d = {
       {"width", c.width},
       {"height", c.height},
       {"intrinsic_matrix", {c.fx, 0.0, 0.0, 0.0, c.fy, 0.0, c.cx, c.cy, 1.0}}};  // column-major
-  WriteTextFileAtomically((dir / "camera_intrinsic.json").string(), open3d.dump(2) + "\n");
+  WriteTextFileAtomically(File("undistorted/camera_intrinsic.json"), open3d.dump(2) + "\n");
 }
 
 void FolderRunSink::WriteReport(const nlohmann::ordered_json& report) {
-  WriteTextFileAtomically((fs::path(out_dir_) / "report.json").string(), report.dump(2) + "\n");
+  WriteTextFileAtomically(File("report.json"), report.dump(2) + "\n");
 }
 
 void FolderRunSink::WriteMap(const std::vector<Surfel>& surfels) {
-  WriteSurfelPly((fs::path(out_dir_) / "map.ply").string(), surfels);
+  WriteSurfelPly(File("map.ply"), surfels);
 }
 
 void InMemoryRunSink::WriteMap(const std::vector<Surfel>& surfels) {

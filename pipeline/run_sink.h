@@ -17,13 +17,16 @@
 //   camera_intrinsic.json   the same as Open3D's PinholeCameraIntrinsic JSON
 //   trajectory.log          the keyframes' world_from_camera in file order (Redwood / Open3D .log)
 // Every file is written atomically (a temporary name, then renamed), so an interrupted run never
-// leaves a truncated file that looks complete.
+// leaves a truncated file that looks complete. The folder is a RunFolder
+// (acquisition/run_folder.h): its marker .glassfusion-run lists every file the run writes, and
+// its lock keeps a second run out while this one writes.
 //
 // Thread-safety: WriteCamera comes first; then WriteKeyframe may be called from one thread while
 // another calls the rest.
 #pragma once
 
 #include <map>
+#include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -31,6 +34,7 @@
 
 #include "acquisition/camera.h"
 #include "acquisition/rgbd_frame.h"
+#include "acquisition/run_folder.h"
 #include "acquisition/trajectory.h"
 #include "sfm/fill_carry.h"
 #include "surfels/surfel_map.h"
@@ -59,13 +63,22 @@ class RunSink {
   virtual std::string Where() const = 0;
 };
 
-// A run folder. The constructor prepares it: it must be new or empty, or hold an earlier run and
-// `replace` be set, in which case its contents are removed first (a folder that holds no run,
-// i.e. no report.json, trajectory.txt, camera.json or keyframes/, is never emptied). Throws
-// InputError otherwise.
+// A run folder. The constructor opens it as a RunFolder that the sink holds (and with it the
+// lock) until it is destroyed: the folder must be new or empty, or hold an earlier run and
+// `options.earlier` be kReplace (--force), in which case only the files that run listed in its
+// marker are removed; a folder of the user's (no marker), the input itself, a folder that contains
+// it or one inside it, and a folder another run is writing are refused. Throws InputError.
 class FolderRunSink : public RunSink {
  public:
-  FolderRunSink(std::string out_dir, bool replace);
+  FolderRunSink(const std::string& out_dir, const RunFolder::Options& options);
+  // The same with options.earlier = replace ? kReplace : kRefuse and no inputs.
+  FolderRunSink(const std::string& out_dir, bool replace);
+  // The run in `folder`/`subfolder` (compare's with_fill/ and without_fill/): its files are
+  // recorded in `folder`'s marker, which must outlive the sink.
+  FolderRunSink(RunFolder* folder, const std::string& subfolder);
+  // Records `relative` (a file the caller writes into the run, e.g. mesh.ply, report.html) in the
+  // marker and returns its path; RunFolder::File.
+  std::string File(const std::string& relative);
   void WriteKeyframe(const std::string& name, const RgbdFrame& frame,
                      const CarriedFillResult& fill) override;
   void WriteTrajectory(const Trajectory& trajectory) override;
@@ -80,7 +93,10 @@ class FolderRunSink : public RunSink {
  private:
   // image on the pinhole camera (as it is without distortion).
   cv::Mat Undistort(const cv::Mat& image, int interpolation) const;
-  std::string out_dir_;
+  std::unique_ptr<RunFolder> owned_;  // the folder, when the sink opened it
+  RunFolder* folder_;
+  std::string prefix_;   // "" or "<subfolder>/"
+  std::string out_dir_;  // folder_->dir() + "/" + prefix_
   // cv::remap maps onto the pinhole camera, set by WriteCamera; empty: no distortion.
   cv::Mat undistort_x_, undistort_y_;
   std::mutex mutex_;

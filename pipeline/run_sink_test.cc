@@ -1,0 +1,108 @@
+// FolderRunSink's run folder: --force (replace) removes only what an earlier run wrote, never a
+// folder that holds no run (a capture has a camera.json too), and a second sink into a folder a
+// live sink is writing is refused at once.
+#include "pipeline/run_sink.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "acquisition/errors.h"
+#include "acquisition/file_util.h"
+#include "tests/testing.h"
+
+namespace gf {
+namespace {
+
+namespace fs = std::filesystem;
+
+void Touch(const std::string& path, const std::string& text) {
+  fs::create_directories(fs::path(path).parent_path());
+  std::ofstream(path) << text;
+}
+
+// What a run writes without any frames: its report and an empty map.
+void WriteSomething(RunSink* sink) {
+  sink->WriteReport({{"complete", true}});
+  sink->WriteMap({});
+}
+
+// The message of the InputError that constructing FolderRunSink(dir, replace) throws ("" when
+// none).
+std::string Refusal(const std::string& dir, bool replace) {
+  try {
+    FolderRunSink sink(dir, replace);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A capture (camera.json, depth.txt, frames, the user's notes): --force must not touch it.
+TEST(FolderRunSink, ForceNeverEmptiesACapture) {
+  testing::TempDir dir;
+  const std::string cap = dir / "cap";
+  for (const char* f : {"camera.json", "depth.txt", "rgb.txt", "depth/1.png", "NOTES.txt"})
+    Touch(cap + "/" + f, "user data");
+  const std::string why = Refusal(cap, true);
+  EXPECT_NE(why.find("holds no run"), std::string::npos) << why;
+  for (const char* f : {"camera.json", "depth.txt", "rgb.txt", "depth/1.png", "NOTES.txt"})
+    EXPECT_EQ(ReadTextFile(cap + "/" + f), "user data") << f;
+}
+
+// --force over an earlier run removes that run's files and keeps the user's files beside them,
+// even inside a folder the run made.
+TEST(FolderRunSink, ForceRemovesOnlyWhatTheEarlierRunWrote) {
+  testing::TempDir dir;
+  const std::string run = dir / "run";
+  {
+    FolderRunSink sink(run, false);
+    WriteSomething(&sink);
+  }
+  Touch(run + "/notes.txt", "mine");
+  Touch(run + "/undistorted/mine.txt", "mine too");
+  EXPECT_NE(Refusal(run, false).find("--force"), std::string::npos);
+  {
+    FolderRunSink sink(run, true);
+    EXPECT_FALSE(fs::exists(run + "/report.json")) << "the earlier run's report is still there";
+    EXPECT_FALSE(fs::exists(run + "/map.ply"));
+    EXPECT_EQ(ReadTextFile(run + "/notes.txt"), "mine");
+    EXPECT_EQ(ReadTextFile(run + "/undistorted/mine.txt"), "mine too");
+    WriteSomething(&sink);
+  }
+  EXPECT_TRUE(fs::exists(run + "/report.json"));
+}
+
+// A file the run did not write is never overwritten, even in a folder that holds a run.
+TEST(FolderRunSink, NeverOverwritesAFileItDidNotWrite) {
+  testing::TempDir dir;
+  const std::string run = dir / "run";
+  {
+    FolderRunSink sink(run, false);
+    sink.WriteReport({{"complete", true}});
+  }
+  Touch(run + "/map.ply", "the user's own model");
+  FolderRunSink sink(run, true);
+  EXPECT_THROW(sink.WriteMap({}), InputError);
+  EXPECT_EQ(ReadTextFile(run + "/map.ply"), "the user's own model");
+}
+
+// While one sink writes a folder, a second one (with or without replace) is refused and deletes
+// nothing of the first's.
+TEST(FolderRunSink, ASecondRunIntoALiveFolderIsRefused) {
+  testing::TempDir dir;
+  const std::string run = dir / "run";
+  FolderRunSink first(run, false);
+  WriteSomething(&first);
+  for (bool replace : {false, true}) {
+    const std::string why = Refusal(run, replace);
+    EXPECT_NE(why.find("another glassfusion run is writing here"), std::string::npos) << why;
+  }
+  EXPECT_TRUE(fs::exists(run + "/report.json"));
+  EXPECT_TRUE(fs::exists(run + "/map.ply"));
+}
+
+}  // namespace
+}  // namespace gf
