@@ -93,7 +93,8 @@ find_program(TIMEOUT timeout)
 if(TIMEOUT)
   run("${TIMEOUT}" --preserve-status -s INT 2 "${GLASSFUSION}" reconstruct "${tmp}/scene" --out
       "${tmp}/interrupted")
-  expect("SIGINT" 130 "^error: .*interrupted: interrupted by SIGINT after [0-9]+ frames; partial run")
+  expect("SIGINT" 130
+         "^error: .*interrupted: interrupted by SIGINT during [a-z ]+ after [0-9]+ frames; partial run")
   expect_run("${tmp}/interrupted" false)
   string(JSON why GET "${report}" stopped_because)
   if(NOT why STREQUAL "interrupted by SIGINT")
@@ -134,7 +135,8 @@ foreach(scale 1 100000)
   expect("info with depth_scale ${scale}" 0 "is depth_scale ${scale} right")
 endforeach()
 
-# 5. All-zero depth: every frame is lost; the run says so and exits 2 unless --allow-lost.
+# 5. All-zero depth: every frame is lost; the run says so and exits 2 unless --allow-lost; its
+# map would be empty, which is refused too.
 if(PYTHON)
   file(COPY "${tmp}/scene/" DESTINATION "${tmp}/zero")
   run("${PYTHON}" -c "import sys, glob, numpy, cv2
@@ -144,11 +146,16 @@ for p in glob.glob(sys.argv[1] + '/depth/*.png'): cv2.imwrite(p, numpy.zeros((48
     run("${GLASSFUSION}" reconstruct "${tmp}/zero" --out "${tmp}/zero_run" --frames 0:10 --no-fill)
     expect("all-zero depth" 2 "^error: .*zero: tracking was lost on 9 of 10 frames: .*--allow-lost")
     expect_run("${tmp}/zero_run" false)
+    # --allow-lost accepts the trajectory (no map: an empty map is refused in its own right).
     run("${GLASSFUSION}" reconstruct "${tmp}/zero" --out "${tmp}/zero_run" --frames 0:10 --no-fill
-        --force --allow-lost)
+        --force --allow-lost --no-fusion)
     if(NOT rc EQUAL 0 OR NOT err MATCHES "warning: .*tracking was lost on 9 of 10 frames")
       message(FATAL_ERROR "all-zero depth with --allow-lost: rc ${rc}: ${err}")
     endif()
+    run("${GLASSFUSION}" reconstruct "${tmp}/zero" --out "${tmp}/zero_run" --frames 0:10 --no-fill
+        --force --allow-lost)
+    expect("all-zero depth with --allow-lost and a map" 2 "^error: .*zero: the map is empty")
+    expect_run("${tmp}/zero_run" false)
     run("${GLASSFUSION}" info "${tmp}/zero")
     expect("info on all-zero depth" 0 "warning: .*no frame has any depth")
   else()
