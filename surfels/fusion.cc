@@ -181,7 +181,14 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
                  &normals);
   });
   Integrate(m, results, &stats);
-  if (m.time_step) CleanUp(m, &stats);
+  if (m.time_step) {
+    CleanUp(m, &stats);
+  } else if (map_.live() > static_cast<size_t>(options_.max_surfels)) {
+    // A fill is no time step (nothing is stale or seen through after it), but its surfels count
+    // against the budget as the sensor's do: a map of many fills must stay within max_surfels too.
+    KeepWithinBudget(&stats);
+    CompactMap();
+  }
   stats.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return stats;

@@ -24,8 +24,9 @@
 //     max_normal_angle_deg whatever their facing), each centre within the other's disc, are
 //     merged into the more confident of the two, so passes over the same surface do
 //     not stack copies of it;
-//  6. the map holds at most max_surfels: beyond it, the least confirmed surfels go (unstable
-//     first, then the stable ones seen longest ago).
+//  6. the map holds at most max_surfels, fills included (checked after every frame and every
+//     fill): beyond it, the least confirmed surfels go (unstable first, then the stable ones seen
+//     longest ago).
 // Radius: sqrt(2) z / f / |n_z|, at most twice the head-on radius. Fills count fill_weight of a
 // sensor measurement, so one keyframe's fill alone never reaches fill_stable_confidence: a fill
 // becomes part of the model only when another keyframe's fill agrees with it (within
@@ -106,8 +107,8 @@ struct FusionOptions {
   // about a sixth of a frame's fusion, and a copy that waits is only hidden behind the surfel it
   // copies meanwhile (association never reaches it), so the model is the same a few frames later.
   int merge_copies_every = 4;
-  // The map's budget, in surfels (48 bytes each: 4 M is 192 MB); beyond it the least confirmed go.
-  // At most kMaxMapSurfels (16 GiB).
+  // The map's budget, in surfels (48 bytes each: 4 M is 192 MB), sensor surfels and fills alike;
+  // beyond it the least confirmed go. At most kMaxMapSurfels (16 GiB).
   long max_surfels = 4'000'000;
   // Normals come from the depth smoothed by a bilateral filter at half size: its diameter in
   // half-size pixels (at most half the largest image side, acquisition/bounds.h) and its depth
@@ -246,6 +247,9 @@ class SurfelFusion {
   // Sets partner_[e] to the entry that entry e is a copy of (-1: none), for MergeRedundant.
   void FindCopies();
   void KeepWithinBudget(FusionStats* stats);
+  // Drops the removed surfels from the map's storage (SurfelMap::Compact) and renews the chunks
+  // that moved.
+  void CompactMap();
   // A surfel changed: its chunk is no longer settled.
   void Touch(size_t surfel) { chunks_[surfel / kChunk].settled = false; }
   // ... and its position or radius may have: the chunk's bounds grow to hold it.
