@@ -19,6 +19,7 @@
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "acquisition/json_text.h"
 #include "apps/interrupt.h"
 #include "apps/progress.h"
 
@@ -156,7 +157,7 @@ void WriteState(const std::string& out_dir, const Running& r, bool ok, double se
                       {"error", ok ? json() : json(LastError(log))},
                       {"log", fs::path(log).filename().string()}};
   WriteTextFileAtomically((StateDir(out_dir) / (r.capture.name + ".json")).string(),
-                          state.dump(2) + "\n");
+                          JsonText(state) + "\n");
 }
 
 }  // namespace
@@ -214,7 +215,7 @@ void WriteBatchManifest(const std::string& out_dir, const std::vector<BatchCaptu
   for (const BatchCapture& c : captures)
     list.push_back({{"name", c.name}, {"input", c.input}, {"config", c.config_file}});
   WriteTextFileAtomically((StateDir(out_dir) / "manifest.json").string(),
-                          json({{"captures", list}}).dump(2) + "\n");
+                          JsonText(json({{"captures", list}})) + "\n");
 }
 
 std::string ExecutablePath() {

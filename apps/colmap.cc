@@ -13,6 +13,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/json_text.h"
 #include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
 #include "pipeline/run_sink.h"
@@ -223,7 +224,7 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
   report["depth_maps"] = maps;
   report["filled_pixels"] = summary.filled_pixels;
   WriteTextFileAtomically((fs::path(run_dir) / "colmap_import.json").string(),
-                          report.dump(2) + "\n");
+                          JsonText(report) + "\n");
   return summary;
 }
 

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "acquisition/errors.h"
+#include "acquisition/json_text.h"
 #include "acquisition/trajectory_metrics.h"
 #include "apps/bench.h"
 #include "apps/capture.h"
@@ -52,7 +53,7 @@ void AddPrintConfig(CLI::App* cmd, const std::string* config_file,
       [config_file, pipeline] {
         ReconstructionOptions o = *pipeline;
         if (!config_file->empty()) ApplyConfigFile(*config_file, &o);
-        std::cout << SettingsToJson(o).dump(2) << std::endl;
+        std::cout << JsonText(SettingsToJson(o)) << std::endl;
         throw CLI::Success();
       },
       "print every setting as the JSON --config reads (after --config FILE) and exit");
@@ -75,7 +76,7 @@ void AddInfoCommand(CLI::App& app) {
     progress.Finish();
     for (const auto& w : info["warnings"])
       std::fprintf(stderr, "warning: %s: %s\n", args->input.c_str(), w.get<std::string>().c_str());
-    std::cout << info.dump(2) << std::endl;
+    std::cout << JsonText(info) << std::endl;
   });
 }
 
@@ -274,7 +275,7 @@ void AddBenchCommand(CLI::App& app) {
           f["opencv_sgbm_pairs"].get<int>());
     }
     std::printf("%d frames, %u cores\n", j["frames"].get<int>(), j["cores"].get<unsigned>());
-    std::cout << j.dump(2) << std::endl;
+    std::cout << JsonText(j) << std::endl;
   });
 }
 
@@ -334,7 +335,7 @@ void AddEvalCommand(CLI::App& app) {
       j["completeness"] = m["completeness"];
       j["accuracy"] = m["accuracy"];
     }
-    std::cout << j.dump(2) << std::endl;
+    std::cout << JsonText(j) << std::endl;
   });
 }
 

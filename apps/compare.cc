@@ -11,6 +11,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/json_text.h"
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
 #include "apps/report_html.h"
@@ -221,7 +222,7 @@ CompareSummary RunCompare(const ReconstructOptions& given) {
     c[v]["accuracy"] = truth["accuracy"];
     c["ate_m"] = truth["ate_m"];
   }
-  WriteTextFileAtomically((out / "compare.json").string(), c.dump(2) + "\n");
+  WriteTextFileAtomically((out / "compare.json").string(), JsonText(c) + "\n");
   WriteRenderings(options.out_dir, source->camera(),
                   ReadTumTrajectory((out / "with_fill/trajectory.txt").string()));
   HtmlReport r("GlassFusion: the model with and without the stereo fill");

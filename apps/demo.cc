@@ -10,6 +10,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/json_text.h"
 #include "acquisition/stats.h"
 #include "apps/compare.h"
 #include "apps/info.h"
@@ -325,7 +326,7 @@ void RunDemo(const DemoOptions& options) {
   r.Heading("The model (glassfusion compare)");
   AddComparisonSections(&r, compare_dir, "compare/");
   AddDatasetSection(&r, data_dir, datasets);
-  WriteTextFileAtomically((out / "report.json").string(), report.dump(2) + "\n");
+  WriteTextFileAtomically((out / "report.json").string(), JsonText(report) + "\n");
   WriteTextFileAtomically((out / "report.html").string(), r.Html());
   std::cout << "demo: glass-table " << synth_summary.BriefReport() << "; " << c.BriefReport()
             << "; report in " << (out / "report.html").string() << std::endl;
