@@ -1,6 +1,7 @@
 #include "acquisition/camera.h"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -9,6 +10,7 @@
 #include <tuple>
 #include <utility>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 
@@ -26,6 +28,88 @@ bool Camera::Check(std::string* message) const {
   for (double d : distortion)
     if (!std::isfinite(d)) return fail("distortion coefficients must be finite");
   return true;
+}
+
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+// Degrees the image spans along one axis, from the outer edge of its first pixel to that of its
+// last: the principal point splits it into two angles.
+double FieldOfViewDeg(int size, double focal, double centre) {
+  return (std::atan((centre + 0.5) / focal) + std::atan((size - 0.5 - centre) / focal)) * kRadToDeg;
+}
+
+std::string DistortionText(const std::array<double, 5>& d) {
+  std::string text = "[";
+  for (size_t i = 0; i < d.size(); ++i) text += (i ? ", " : "") + FormatNumber(d[i]);
+  return text + "]";
+}
+
+// Empty when r_d(r) = r (1 + k1 r^2 + k2 r^4 + k3 r^6) grows from the axis until it reaches
+// corner_radius (the corners' distorted normalised radius), else why not.
+std::string RadialProblem(const std::array<double, 5>& d, double corner_radius) {
+  const double k1 = d[0], k2 = d[1], k3 = d[4];
+  // The farthest ray the model may need: kMaxFieldOfViewDeg / 2 off the axis.
+  const double max_r = std::tan(kMaxFieldOfViewDeg / 2 / kRadToDeg);
+  const double step = corner_radius / 1000;  // a thousandth of the way to the corners
+  for (double r = 0; r <= max_r; r += step) {
+    const double r2 = r * r;
+    if (r * (1 + r2 * (k1 + r2 * (k2 + r2 * k3))) >= corner_radius) return "";
+    const double slope = 1 + r2 * (3 * k1 + r2 * (5 * k2 + r2 * 7 * k3));
+    if (!(slope > 0)) {
+      char text[160];
+      std::snprintf(text, sizeof(text),
+                    "stops growing at normalised radius %.3g, inside the image (its corners lie "
+                    "at %.3g): pixels beyond have no ray",
+                    r, corner_radius);
+      return text;
+    }
+  }
+  char text[160];
+  std::snprintf(text, sizeof(text),
+                "maps no ray within %.0f degrees of the axis to the image's corners (normalised "
+                "radius %.3g)",
+                kMaxFieldOfViewDeg / 2, corner_radius);
+  return text;
+}
+
+}  // namespace
+
+bool Camera::CheckPlausible(std::string* message) const {
+  if (!Check(message)) return false;
+  auto fov = [](const char* field, double focal, double degrees) {
+    char text[160];
+    std::snprintf(text, sizeof(text), "%s %s gives a %.1f degree field of view; expected %.0f-%.0f",
+                  field, FormatNumber(focal).c_str(), degrees, kMinFieldOfViewDeg,
+                  kMaxFieldOfViewDeg);
+    return std::string(text);
+  };
+  auto outside = [](const char* field, double centre, int size) {
+    return std::string(field) + " " + FormatNumber(centre) + " lies outside the image (-0.5 to " +
+           FormatNumber(size - 0.5) + " pixels)";
+  };
+  const double fov_x = FieldOfViewDeg(width, fx, cx), fov_y = FieldOfViewDeg(height, fy, cy);
+  double corner_radius = 0;
+  for (double u : {-0.5, width - 0.5})
+    for (double v : {-0.5, height - 0.5})
+      corner_radius = std::max(corner_radius, std::hypot((u - cx) / fx, (v - cy) / fy));
+  FieldCheck c(message);
+  c.Require(width >= kMinImageWidthPx && height >= kMinImageHeightPx,
+            "width " + std::to_string(width) + " and height " + std::to_string(height) +
+                " make an image smaller than the least GlassFusion works on (" +
+                std::to_string(kMinImageWidthPx) + "x" + std::to_string(kMinImageHeightPx) + ")")
+      .In("width", width, kMinImageWidthPx, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("height", height, kMinImageHeightPx, kMaxImageSidePx, kLargerThanAnyImage)
+      .Require(cx >= -0.5 && cx <= width - 0.5, outside("cx", cx, width))
+      .Require(cy >= -0.5 && cy <= height - 0.5, outside("cy", cy, height))
+      .Require(fov_x >= kMinFieldOfViewDeg && fov_x <= kMaxFieldOfViewDeg, fov("fx", fx, fov_x))
+      .Require(fov_y >= kMinFieldOfViewDeg && fov_y <= kMaxFieldOfViewDeg, fov("fy", fy, fov_y));
+  if (!c.ok()) return false;
+  const std::string radial = RadialProblem(distortion, corner_radius);
+  c.Require(radial.empty(),
+            "distortion " + DistortionText(distortion) + ": its radial part " + radial);
+  return c.ok();
 }
 
 bool Camera::HasDistortion() const {
@@ -188,6 +272,12 @@ Camera ParseIntrinsics(const nlohmann::json& j, const std::string& where, const 
   const double width = Number(j, where, "width", path), height = Number(j, where, "height", path);
   if (width != std::floor(width) || height != std::floor(height))
     throw InputError(path, where + "width and height must be integers");
+  // Before they are made ints (CheckPlausible checks the size again, with the least one).
+  std::string problem;
+  FieldCheck size(&problem);
+  size.In("width", width, 1, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("height", height, 1, kMaxImageSidePx, kLargerThanAnyImage);
+  if (!size.ok()) throw InputError(path, where + problem);
   c.width = static_cast<int>(width);
   c.height = static_cast<int>(height);
   c.fx = Number(j, where, "fx", path);
@@ -198,8 +288,7 @@ Camera ParseIntrinsics(const nlohmann::json& j, const std::string& where, const 
     const std::vector<double> d = Numbers(j["distortion"], where + "distortion", 5, path);
     std::copy(d.begin(), d.end(), c.distortion.begin());
   }
-  std::string problem;
-  if (!c.Check(&problem)) throw InputError(path, where + problem);
+  if (!c.CheckPlausible(&problem)) throw InputError(path, where + problem);
   return c;
 }
 

@@ -38,6 +38,11 @@
 
 namespace gf {
 
+// The field of view a camera may have across its image, degrees, each way: from a long lens's to
+// a fisheye's (beyond 170 degrees the pinhole and Brown-Conrady models no longer hold).
+inline constexpr double kMinFieldOfViewDeg = 20;
+inline constexpr double kMaxFieldOfViewDeg = 170;
+
 struct Camera {
   int width = 640;    // image width, pixels
   int height = 480;   // image height, pixels
@@ -50,6 +55,16 @@ struct Camera {
 
   // Valid intrinsics: positive size and focal lengths, finite values. Message says what is wrong.
   bool Check(std::string* message = nullptr) const;
+  // Valid intrinsics (Check) that a real camera could have; LoadCameraFile refuses others, and the
+  // message names the field:
+  //  - a size from kMinImageWidthPx x kMinImageHeightPx to kMaxImageSidePx (acquisition/bounds.h);
+  //  - the principal point inside the image;
+  //  - a field of view of kMinFieldOfViewDeg to kMaxFieldOfViewDeg across the image each way
+  //    (RGB-D sensors see 45-90 degrees; fx = 1e30 would see nothing, fx = 1 everything);
+  //  - a radial distortion r_d(r) = r (1 + k1 r^2 + k2 r^4 + k3 r^6) that grows with the
+  //    undistorted normalised radius r until it reaches the image's corners, so that every pixel
+  //    has one ray (the tangential terms are small and not tested).
+  bool CheckPlausible(std::string* message = nullptr) const;
   bool HasDistortion() const;
 
   // Ideal pinhole projection (no distortion). point_in_camera.z() must be > 0.
@@ -145,7 +160,7 @@ struct CameraFile {
 };
 
 // Reads camera.json; throws InputError naming the file on a missing file, bad JSON, a missing or
-// wrongly typed field, or invalid intrinsics.
+// wrongly typed field, or invalid or implausible intrinsics (Camera::CheckPlausible).
 CameraFile LoadCameraFile(const std::string& path);
 // Writes camera.json atomically (temporary name, then rename).
 void SaveCameraFile(const std::string& path, const CameraFile& file);

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "acquisition/errors.h"
+#include "acquisition/frame_source.h"
 #include "tests/testing.h"
 
 namespace gf {
@@ -29,9 +30,7 @@ TEST(Camera, LoadsTheTumCameraJson) {
 TEST(Camera, JsonRoundTripKeepsEveryField) {
   testing::TempDir dir;
   CameraFile f;
-  f.camera = testing::TumFr1Camera();
-  f.camera.width = 320;
-  f.camera.height = 240;
+  f.camera = testing::TumFr1Camera().Scaled(0.5);  // 320x240
   f.depth_scale = 1000.0;
   f.depth_registered_to_color = false;
   Camera ir = testing::TumFr1Camera();
@@ -57,16 +56,22 @@ TEST(Camera, JsonRoundTripKeepsEveryField) {
 
 TEST(Camera, UnregisteredDepthNeedsADepthCamera) {
   testing::TempDir dir;
-  std::ofstream(dir / "camera.json") << R"({"width": 640, "height": 480, "fx": 5, "fy": 5, "cx": 1,
-      "cy": 1, "depth_registered_to_color": false})";
-  EXPECT_THROW(LoadCameraFile(dir / "camera.json"), InputError);
+  std::ofstream(dir / "camera.json") << R"({"width": 640, "height": 480, "fx": 525, "fy": 525,
+      "cx": 319.5, "cy": 239.5, "depth_registered_to_color": false})";
+  try {
+    LoadCameraFile(dir / "camera.json");
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(e.problem().find("\"depth_camera\" intrinsics are missing"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Camera, TheDepthSensorsReadoutIsOptionalAndChecked) {
   testing::TempDir dir;
   const std::string path = dir / "camera.json";
   const std::string intrinsics =
-      R"("width": 640, "height": 480, "fx": 5, "fy": 5, "cx": 1, "cy": 1)";
+      R"("width": 640, "height": 480, "fx": 525, "fy": 525, "cx": 319.5, "cy": 239.5)";
   WriteText(path, "{" + intrinsics + "}");
   CameraFile f = LoadCameraFile(path);
   EXPECT_FALSE(f.depth_readout_s.has_value());
@@ -102,11 +107,78 @@ TEST(Camera, BadFilesGiveOneLineErrorsNamingFileAndProblem) {
   expect_error("{ not json", "not valid JSON");
   expect_error(R"({"width": 640, "height": 480, "fx": 525, "fy": 525, "cx": 319.5})", "\"cy\"");
   expect_error(R"({"width": 640, "height": 480, "fx": -5, "fy": 525, "cx": 1, "cy": 1})", "focal");
-  expect_error(R"({"width": 640, "height": 480, "fx": 5, "fy": 5, "cx": 1, "cy": 1,
+  expect_error(R"({"width": 640, "height": 480, "fx": 525, "fy": 525, "cx": 319.5, "cy": 239.5,
                    "depth_scale": 0})",
                "depth_scale");
   expect_error(R"({"width": "640", "height": 480, "fx": 5, "fy": 5, "cx": 1, "cy": 1})", "number");
   EXPECT_THROW(LoadCameraFile(dir / "missing.json"), InputError);
+}
+
+// Intrinsics no real camera has are refused, naming the field: the problem LoadCameraFile reports
+// for a 640x480 camera.json with `fields` changed from TUM-like values.
+std::string CameraProblem(const std::string& fields) {
+  testing::TempDir dir;
+  const std::string base =
+      R"("width": 640, "height": 480, "fx": 525, "fy": 525, "cx": 319.5, "cy": 239.5)";
+  WriteText(dir / "camera.json", "{" + base + (fields.empty() ? "" : ", " + fields) + "}");
+  try {
+    LoadCameraFile(dir / "camera.json");
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), dir / "camera.json");
+    return e.problem();
+  }
+  return "";
+}
+
+TEST(Camera, ImplausibleIntrinsicsAreRefusedNamingTheField) {
+  EXPECT_EQ(CameraProblem(""), "");
+  // nlohmann keeps the last of duplicate keys: each case overrides a field of the base.
+  EXPECT_EQ(CameraProblem(R"("fx": 1e30, "fy": 1e30)"),
+            "fx 1e+30 gives a 0.0 degree field of view; expected 20-170");
+  EXPECT_EQ(CameraProblem(R"("fy": 1)"),
+            "fy 1 gives a 179.5 degree field of view; expected 20-170");
+  EXPECT_EQ(CameraProblem(R"("fx": 3000)"),
+            "fx 3000 gives a 12.2 degree field of view; expected 20-170");
+  EXPECT_EQ(CameraProblem(R"("cx": 5000)"),
+            "cx 5000 lies outside the image (-0.5 to 639.5 pixels)");
+  EXPECT_EQ(CameraProblem(R"("cy": -20)"), "cy -20 lies outside the image (-0.5 to 479.5 pixels)");
+  EXPECT_EQ(CameraProblem(R"("width": 30000, "height": 30000)"),
+            "width 30000 is larger than any image (at most 4096)");
+  EXPECT_EQ(CameraProblem(R"("width": 1, "height": 1, "cx": 0, "cy": 0, "fx": 1, "fy": 1)"),
+            "width 1 and height 1 make an image smaller than the least GlassFusion works on "
+            "(32x24)");
+  // Distortion that folds back inside the image: pixels beyond the fold have no ray.
+  EXPECT_EQ(CameraProblem(R"("distortion": [-10, 0, 0, 0, 0])"),
+            "distortion [-10, 0, 0, 0, 0]: its radial part stops growing at normalised radius "
+            "0.183, inside the image (its corners lie at 0.762): pixels beyond have no ray");
+  const std::string barrel = CameraProblem(R"("distortion": [-0.5, 0, 0, 0, 0])");
+  EXPECT_EQ(barrel.rfind("distortion [-0.5, 0, 0, 0, 0]: its radial part stops growing", 0), 0u)
+      << barrel;
+  // The depth camera of unregistered depth is held to the same, named as such.
+  const std::string depth_camera = CameraProblem(
+      R"("depth_registered_to_color": false, "depth_camera": {"width": 640, "height": 480,
+         "fx": 580, "fy": 580, "cx": 7000, "cy": 239.5})");
+  EXPECT_EQ(depth_camera, "depth_camera.cx 7000 lies outside the image (-0.5 to 639.5 pixels)");
+}
+
+// Every camera GlassFusion ships or reads is plausible: TUM fr1's strong distortion, the nominal
+// Kinect v1 calibration (colour and IR), and the datasets' camera.json files.
+TEST(Camera, RealCamerasArePlausible) {
+  std::string problem;
+  EXPECT_TRUE(testing::TumFr1Camera().CheckPlausible(&problem)) << problem;
+  const CameraFile kinect = NominalKinectV1Calibration();
+  EXPECT_TRUE(kinect.camera.CheckPlausible(&problem)) << problem;
+  ASSERT_TRUE(kinect.depth_camera.has_value());
+  EXPECT_TRUE(kinect.depth_camera->CheckPlausible(&problem)) << problem;
+  int read = 0;
+  for (const char* name :
+       {"tum_fr1_xyz_head", "tum_fr1_xyz_mid", "icl_livingroom1_micro", "icl_livingroom1_noisy5"}) {
+    const std::string folder = testing::SharedDataset(name);
+    if (folder.empty()) continue;
+    EXPECT_NO_THROW(LoadCameraFile(folder + "/camera.json")) << name;
+    ++read;
+  }
+  if (read == 0) GTEST_SKIP() << "no shared datasets on this machine";
 }
 
 TEST(Camera, BackProjectInvertsProject) {

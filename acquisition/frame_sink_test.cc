@@ -14,13 +14,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The smallest image GlassFusion reads (32x24), with a plausible 44 x 33 degree field of view.
 CameraFile SmallCamera() {
   CameraFile c;
-  c.camera.width = 8;
-  c.camera.height = 6;
-  c.camera.fx = c.camera.fy = 10;
-  c.camera.cx = 3.5;
-  c.camera.cy = 2.5;
+  c.camera.width = 32;
+  c.camera.height = 24;
+  c.camera.fx = c.camera.fy = 40;
+  c.camera.cx = 15.5;
+  c.camera.cy = 11.5;
   return c;
 }
 
@@ -29,10 +30,10 @@ RgbdFrame SmallFrame(int i) {
   f.index = i;
   f.timestamp = 100.0 + i / 30.0;
   f.color_timestamp = f.timestamp + 0.004;
-  f.color = cv::Mat(6, 8, CV_8UC3, cv::Scalar(10 * i, 20, 30));
-  f.depth = cv::Mat(6, 8, CV_32FC1, cv::Scalar(1.0f + 0.1234f * i));
+  f.color = cv::Mat(24, 32, CV_8UC3, cv::Scalar(10 * i, 20, 30));
+  f.depth = cv::Mat(24, 32, CV_32FC1, cv::Scalar(1.0f + 0.1234f * i));
   f.depth.at<float>(0, 0) = 0.f;  // a hole survives the round trip
-  f.hole_mask = cv::Mat(6, 8, CV_8UC1, cv::Scalar(0));
+  f.hole_mask = cv::Mat(24, 32, CV_8UC1, cv::Scalar(0));
   return f;
 }
 
@@ -48,7 +49,7 @@ TEST(TumFolderSink, WritesAFolderTheTumReaderReadsBack) {
   auto source = OpenFrameSource(out, {});
   EXPECT_EQ(source->Kind(), "tum");
   EXPECT_EQ(source->FrameCount().value(), 3);
-  EXPECT_EQ(source->camera().fx, 10.0);
+  EXPECT_EQ(source->camera().fx, 40.0);
   RgbdFrame f;
   for (int i = 0; i < 3; ++i) {
     ASSERT_TRUE(source->Next(&f));

@@ -7,57 +7,18 @@
 #include <filesystem>
 #include <sstream>
 
+#include "acquisition/bounds.h"
 #include "acquisition/depth_registration.h"
 #include "acquisition/devices.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/tum_index.h"
 
 namespace fs = std::filesystem;
 
 namespace gf {
 namespace {
-
-struct IndexLine {
-  double timestamp;
-  std::string timestamp_text;
-  std::string path;  // absolute or folder-relative as listed, resolved against the folder
-};
-
-// A TUM index file: "timestamp filename" per line, '#' comments.
-std::vector<IndexLine> ReadTumIndex(const std::string& folder, const std::string& name) {
-  const std::string path = (fs::path(folder) / name).string();
-  std::istringstream in(ReadTextFile(path));
-  std::vector<IndexLine> lines;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    const size_t start = line.find_first_not_of(" \t\r");
-    if (start == std::string::npos || line[start] == '#') continue;
-    std::istringstream fields(line);
-    IndexLine entry;
-    std::string file;
-    if (!(fields >> entry.timestamp_text >> file))
-      throw InputError(path,
-                       "line " + std::to_string(number) + ": expected \"timestamp filename\"");
-    try {
-      size_t used = 0;
-      entry.timestamp = std::stod(entry.timestamp_text, &used);
-      if (used != entry.timestamp_text.size()) throw std::invalid_argument("trailing");
-    } catch (const std::exception&) {
-      throw InputError(path, "line " + std::to_string(number) + ": bad timestamp \"" +
-                                 entry.timestamp_text + "\"");
-    }
-    entry.path = (fs::path(folder) / file).string();
-    lines.push_back(entry);
-  }
-  if (lines.empty()) throw InputError(path, "index lists no images");
-  std::stable_sort(lines.begin(), lines.end(), [](const IndexLine& a, const IndexLine& b) {
-    return a.timestamp < b.timestamp;
-  });
-  return lines;
-}
 
 // Depth and colour index lines paired one-to-one by time (AssociateTimestamps).
 std::vector<FolderFrameEntry> PairByTime(const std::vector<IndexLine>& depth,
@@ -195,6 +156,44 @@ void ProcessRawDepth(const cv::Mat& raw, const std::string& where, const CameraF
   }
 }
 
+namespace {
+
+// The size of an image from its header, or from decoding it where the header is of no format
+// ReadImageSize knows; nullopt when the file is not there (Next() reports that).
+std::optional<cv::Size> ImageSize(const std::string& path, bool depth) {
+  if (!IsRegularFile(path)) return std::nullopt;
+  if (const std::optional<cv::Size> size = ReadImageSize(path)) return size;
+  return (depth ? ReadDepthImage(path) : ReadColorImage(path)).size();
+}
+
+void CheckImageSize(const std::string& path, const char* what, const cv::Size& size,
+                    const char* camera_name, const Camera& camera) {
+  std::ostringstream s;
+  if (size.width < kMinImageWidthPx || size.height < kMinImageHeightPx) {
+    s << what << " image is " << size.width << "x" << size.height
+      << ", smaller than the least GlassFusion works on (" << kMinImageWidthPx << "x"
+      << kMinImageHeightPx << ")";
+    throw InputError(path, s.str());
+  }
+  if (size.width != camera.width || size.height != camera.height) {
+    s << what << " image is " << size.width << "x" << size.height << " but the " << camera_name
+      << " is " << camera.width << "x" << camera.height;
+    throw InputError(path, s.str());
+  }
+}
+
+}  // namespace
+
+void FolderFrameSource::CheckFirstFrame(const FolderFrameEntry& first, const CameraFile& camera) {
+  const bool registered = camera.depth_registered_to_color;
+  if (const auto size = ImageSize(first.depth_path, true))
+    CheckImageSize(first.depth_path, "depth", *size, registered ? "camera" : "depth camera",
+                   registered ? camera.camera : *camera.depth_camera);
+  if (first.color_path.empty()) return;
+  if (const auto size = ImageSize(first.color_path, false))
+    CheckImageSize(first.color_path, "colour", *size, "camera", camera.camera);
+}
+
 int FolderFrameSource::MissingColorFiles() const {
   int missing = 0;
   for (const FolderFrameEntry& e : entries_)
@@ -214,6 +213,7 @@ FolderFrameSource::FolderFrameSource(std::string kind, std::string input, Camera
       options_(std::move(options)) {
   std::string problem;
   GF_CHECK(options_.Check(&problem), problem);
+  if (!entries_.empty()) CheckFirstFrame(entries_.front(), camera_);
 }
 
 bool FolderFrameSource::Next(RgbdFrame* frame) {
@@ -244,6 +244,12 @@ bool FolderFrameSource::Next(RgbdFrame* frame) {
 
 std::unique_ptr<FolderFrameSource> OpenTumFolder(const std::string& folder,
                                                  const FrameSourceOptions& options) {
+  for (const char* name : {"rgb.txt", "depth.txt"}) {
+    const std::string problem = IndexFileProblem((fs::path(folder) / name).string());
+    if (!problem.empty())
+      throw InputError((fs::path(folder) / name).string(),
+                       problem + " (a TUM folder needs both rgb.txt and depth.txt)");
+  }
   const std::vector<IndexLine> depth = ReadTumIndex(folder, "depth.txt");
   const std::vector<IndexLine> color = ReadTumIndex(folder, "rgb.txt");
   const CameraFile camera = LoadFolderCamera(folder, options);
@@ -338,7 +344,7 @@ bool ParseFakenectName(const std::string& name, std::string* time_text, double* 
   try {
     size_t used = 0;
     *seconds = std::stod(*time_text, &used);
-    return used == time_text->size();
+    return used == time_text->size() && std::isfinite(*seconds);
   } catch (const std::exception&) {
     return false;
   }
@@ -431,7 +437,10 @@ bool InMemoryFrameSource::Next(RgbdFrame* frame) {
 std::string DetectInputKind(const std::string& input) {
   if (IsDirectory(input)) {
     const fs::path p(input);
-    if (IsRegularFile((p / "rgb.txt").string()) && IsRegularFile((p / "depth.txt").string()))
+    // Either index makes it a TUM folder (OpenTumFolder then says which one is unusable): a
+    // folder with depth.txt but no usable rgb.txt is not to be read as a Redwood folder, paired by
+    // position instead of by time.
+    if (PathListed((p / "rgb.txt").string()) || PathListed((p / "depth.txt").string()))
       return "tum";
     if (IsRegularFile((p / "INDEX.txt").string())) return "fakenect";
     const bool has_color = !FirstExistingDir(input, {"image", "color", "rgb"}).empty();

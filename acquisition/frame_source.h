@@ -8,7 +8,9 @@
 //   while (source->Next(&frame)) { ... frame.depth (metres), frame.hole_mask ... }
 //
 // Errors: OpenFrameSource and Next throw InputError("<file>: <problem>") for unreadable or
-// inconsistent input (missing index, undecodable image, wrong bit depth, size mismatch).
+// inconsistent input (missing index, a timestamp that is not a finite number, undecodable image,
+// wrong bit depth, size mismatch, images under kMinImageWidthPx x kMinImageHeightPx). Folder
+// sources check the first frame's image sizes against the camera when they open.
 // Thread-safety: a source is used from one thread at a time.
 #pragma once
 
@@ -94,6 +96,11 @@ class FolderFrameSource : public FrameSource {
   std::string input_;
   CameraFile camera_;
   DepthConvention convention_;
+  // The first frame's images against the camera (and their least size), from their headers: a
+  // camera.json that does not describe the images is refused before anything is allocated for
+  // its size. Throws InputError naming the image.
+  static void CheckFirstFrame(const FolderFrameEntry& first, const CameraFile& camera);
+
   std::vector<FolderFrameEntry> entries_;
   FrameSourceOptions options_;
   size_t next_ = 0;
@@ -101,7 +108,8 @@ class FolderFrameSource : public FrameSource {
 
 // TUM RGB-D folder: rgb.txt and depth.txt ("timestamp filename" lines, # comments), camera.json.
 // Colour and depth are associated one-to-one by nearest timestamp within max_association_dt_s, as
-// TUM's associate.py does; unmatched frames are dropped and counted (and logged).
+// TUM's associate.py does; unmatched frames are dropped and counted (and logged). Both index files
+// must be regular files (a missing one, a folder or a dangling link is an InputError naming it).
 std::unique_ptr<FolderFrameSource> OpenTumFolder(const std::string& folder,
                                                  const FrameSourceOptions& options);
 // Redwood / Open3D folder: image/ or color/ (or rgb/) and depth/ with files paired by sorted name.
@@ -142,8 +150,8 @@ class InMemoryFrameSource : public FrameSource {
   size_t next_ = 0;
 };
 
-// What kind of input a path is: "tum", "redwood", "fakenect", "kinect_raw", "oni", or "" when
-// unrecognised.
+// What kind of input a path is: "tum" (a folder with rgb.txt or depth.txt, even a broken one),
+// "redwood", "fakenect", "kinect_raw", "oni", or "" when unrecognised.
 std::string DetectInputKind(const std::string& input);
 
 // Opens any supported input, detected from what it is: a TUM, Redwood or raw Kinect folder, an .oni

@@ -5,8 +5,11 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <optional>
 
 #include "acquisition/errors.h"
+#include "acquisition/image_io.h"
 #include "tests/testing.h"
 
 namespace gf {
@@ -168,14 +171,14 @@ class TinyTum : public ::testing::Test {
     fs::create_directories(dir_ / "rgb");
     fs::create_directories(dir_ / "depth");
     std::ofstream(dir_ / "camera.json")
-        << R"({"width": 8, "height": 6, "fx": 10, "fy": 10, "cx": 3.5, "cy": 2.5,
+        << R"({"width": 32, "height": 24, "fx": 40, "fy": 40, "cx": 15.5, "cy": 11.5,
                "distortion": [0,0,0,0,0], "depth_scale": 5000})";
     std::ofstream(dir_ / "rgb.txt") << "# color\n1.000 rgb/1.png\n2.000 rgb/2.png\n";
     std::ofstream(dir_ / "depth.txt") << "# depth\n1.005 depth/1.png\n2.010 depth/2.png\n";
-    cv::imwrite(dir_ / "rgb/1.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(10, 20, 30)));
-    cv::imwrite(dir_ / "rgb/2.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(10, 20, 30)));
-    cv::imwrite(dir_ / "depth/1.png", cv::Mat(6, 8, CV_16UC1, cv::Scalar(5000)));
-    cv::imwrite(dir_ / "depth/2.png", cv::Mat(6, 8, CV_16UC1, cv::Scalar(0)));
+    cv::imwrite(dir_ / "rgb/1.png", cv::Mat(24, 32, CV_8UC3, cv::Scalar(10, 20, 30)));
+    cv::imwrite(dir_ / "rgb/2.png", cv::Mat(24, 32, CV_8UC3, cv::Scalar(10, 20, 30)));
+    cv::imwrite(dir_ / "depth/1.png", cv::Mat(24, 32, CV_16UC1, cv::Scalar(5000)));
+    cv::imwrite(dir_ / "depth/2.png", cv::Mat(24, 32, CV_16UC1, cv::Scalar(0)));
   }
   // Reads every frame; returns the error message or "".
   std::string ReadAll() {
@@ -199,7 +202,7 @@ TEST_F(TinyTum, ReadsBothFrames) {
   ASSERT_TRUE(source->Next(&f));
   EXPECT_FLOAT_EQ(f.depth.at<float>(0, 0), 1.0f);
   ASSERT_TRUE(source->Next(&f));
-  EXPECT_EQ(CountHoles(f.hole_mask).no_return, 48u);
+  EXPECT_EQ(CountHoles(f.hole_mask).no_return, 32u * 24u);
   EXPECT_FALSE(source->Next(&f));
 }
 
@@ -209,12 +212,92 @@ TEST_F(TinyTum, MissingIndexNamesTheFile) {
     OpenTumFolder(dir_.path(), {});
     ADD_FAILURE();
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), (dir_ / "depth.txt") + ": file not found");
+    EXPECT_EQ(
+        std::string(e.what()),
+        (dir_ / "depth.txt") + ": file not found (a TUM folder needs both rgb.txt and depth.txt)");
   }
   // Nothing left that identifies the folder: the error names the input.
+  fs::remove(dir_ / "rgb.txt");
   fs::remove_all(dir_ / "rgb");
   const std::string message = ReadAll();
   EXPECT_NE(message.find(dir_.path() + ": unrecognised input"), std::string::npos) << message;
+}
+
+// depth.txt without a usable rgb.txt is a broken TUM folder, not a Redwood folder (rgb/ and
+// depth/ paired by position): the error names rgb.txt, whatever stands in its place.
+TEST_F(TinyTum, DepthIndexWithoutAUsableColourIndexIsAnError) {
+  const std::string rgb_txt = dir_ / "rgb.txt";
+  auto expect = [&](const std::string& problem) {
+    const std::string message = ReadAll();
+    EXPECT_EQ(message,
+              rgb_txt + ": " + problem + " (a TUM folder needs both rgb.txt and depth.txt)");
+  };
+  fs::remove(rgb_txt);
+  expect("file not found");
+  fs::create_directory(rgb_txt);
+  expect("is a folder, not a file");
+  fs::remove(rgb_txt);
+  fs::create_symlink(dir_ / "no_such_index.txt", rgb_txt);
+  expect("is a link to nothing");
+  EXPECT_EQ(DetectInputKind(dir_.path()), "tum");
+}
+
+// A timestamp must be a finite number: std::stod reads "nan" and "inf", and one NaN used to drop
+// frames from the association silently.
+TEST_F(TinyTum, NonFiniteTimestampsNameTheFileAndLine) {
+  for (const std::string bad : {"nan", "inf", "-inf", "NaN", "1.0x", "abc"}) {
+    std::ofstream(dir_ / "depth.txt") << "# depth\n1.005 depth/1.png\n" << bad << " depth/2.png\n";
+    EXPECT_EQ(ReadAll(), (dir_ / "depth.txt") + ": line 3: bad timestamp \"" + bad +
+                             "\" (expected a finite number of seconds)");
+  }
+}
+
+// The camera must describe the images: the first frame's headers are read when the folder opens,
+// before anything is allocated for the camera's size.
+TEST_F(TinyTum, ACameraThatDoesNotDescribeTheImagesIsRefusedAtOpen) {
+  std::ofstream(dir_ / "camera.json", std::ios::trunc)
+      << R"({"width": 4000, "height": 3000, "fx": 3500, "fy": 3500, "cx": 1999.5, "cy": 1499.5,
+             "depth_scale": 5000})";
+  try {
+    OpenFrameSource(dir_.path(), {});
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (dir_ / "depth/1.png") + ": depth image is 32x24 but the camera is 4000x3000");
+  }
+}
+
+// Images under 32x24 are refused, naming the image.
+TEST_F(TinyTum, ImagesBelowTheLeastSizeAreRefused) {
+  cv::imwrite(dir_ / "depth/1.png", cv::Mat(1, 1, CV_16UC1, cv::Scalar(5000)));
+  EXPECT_EQ(ReadAll(), (dir_ / "depth/1.png") +
+                           ": depth image is 1x1, smaller than the least GlassFusion works on "
+                           "(32x24)");
+  cv::imwrite(dir_ / "depth/1.png", cv::Mat(24, 32, CV_16UC1, cv::Scalar(5000)));
+  cv::imwrite(dir_ / "rgb/1.png", cv::Mat(24, 31, CV_8UC3, cv::Scalar(0)));
+  EXPECT_EQ(ReadAll(), (dir_ / "rgb/1.png") +
+                           ": colour image is 31x24, smaller than the least GlassFusion works on "
+                           "(32x24)");
+}
+
+// Image sizes from the headers alone, as decoding finds them.
+TEST(ReadImageSize, ReadsPngJpegAndNetpbmHeaders) {
+  testing::TempDir dir;
+  const cv::Mat color(37, 53, CV_8UC3, cv::Scalar(1, 2, 3));
+  for (const char* name : {"a.png", "a.jpg", "a.ppm", "a.pgm"}) {
+    const std::string path = dir / name;
+    cv::Mat image = color;
+    if (std::string(name) == "a.pgm") cv::cvtColor(color, image, cv::COLOR_BGR2GRAY);
+    ASSERT_TRUE(cv::imwrite(path, image)) << name;
+    const std::optional<cv::Size> size = ReadImageSize(path);
+    ASSERT_TRUE(size.has_value()) << name;
+    EXPECT_EQ(*size, cv::Size(53, 37)) << name;
+  }
+  ASSERT_TRUE(cv::imwrite(dir / "d.png", cv::Mat(480, 640, CV_16UC1, cv::Scalar(0))));
+  EXPECT_EQ(ReadImageSize(dir / "d.png").value_or(cv::Size()), cv::Size(640, 480));
+  std::ofstream(dir / "junk.png") << "not an image";
+  EXPECT_FALSE(ReadImageSize(dir / "junk.png").has_value());
+  EXPECT_FALSE(ReadImageSize(dir / "missing.png").has_value());
 }
 
 TEST_F(TinyTum, CorruptColourImageNamesTheFile) {
@@ -224,15 +307,15 @@ TEST_F(TinyTum, CorruptColourImageNamesTheFile) {
 }
 
 TEST_F(TinyTum, MismatchedSizesAndBitDepthAreReported) {
-  cv::imwrite(dir_ / "depth/2.png", cv::Mat(3, 4, CV_16UC1, cv::Scalar(0)));
-  EXPECT_NE(ReadAll().find("depth/2.png: depth image is 4x3 but the camera is 8x6"),
+  cv::imwrite(dir_ / "depth/2.png", cv::Mat(12, 16, CV_16UC1, cv::Scalar(0)));
+  EXPECT_NE(ReadAll().find("depth/2.png: depth image is 16x12 but the camera is 32x24"),
             std::string::npos);
-  cv::imwrite(dir_ / "depth/2.png", cv::Mat(6, 8, CV_8UC1, cv::Scalar(0)));
+  cv::imwrite(dir_ / "depth/2.png", cv::Mat(24, 32, CV_8UC1, cv::Scalar(0)));
   EXPECT_NE(ReadAll().find("depth/2.png: depth image is 8-bit, expected 16-bit"),
             std::string::npos);
-  cv::imwrite(dir_ / "depth/2.png", cv::Mat(6, 8, CV_16UC1, cv::Scalar(0)));
-  cv::imwrite(dir_ / "rgb/2.png", cv::Mat(5, 8, CV_8UC3, cv::Scalar(0)));
-  EXPECT_NE(ReadAll().find("rgb/2.png: colour image is 8x5"), std::string::npos) << ReadAll();
+  cv::imwrite(dir_ / "depth/2.png", cv::Mat(24, 32, CV_16UC1, cv::Scalar(0)));
+  cv::imwrite(dir_ / "rgb/2.png", cv::Mat(23, 32, CV_8UC3, cv::Scalar(0)));
+  EXPECT_NE(ReadAll().find("rgb/2.png: colour image is 32x23"), std::string::npos) << ReadAll();
 }
 
 TEST(InMemoryFrameSource, DeliversFramesInOrder) {

@@ -1,6 +1,8 @@
 #include "acquisition/image_io.h"
 
 #include <cctype>
+#include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -55,7 +57,69 @@ const char* DepthTypeName(int type) {
   }
 }
 
+uint32_t BigEndian(const unsigned char* p, int bytes) {
+  uint32_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+// JPEG: the frame header (a SOF marker: baseline, progressive, lossless ...) holds the size.
+std::optional<cv::Size> JpegSize(std::istream& in) {
+  unsigned char b[8];
+  while (in.read(reinterpret_cast<char*>(b), 2)) {
+    if (b[0] != 0xFF) return std::nullopt;
+    const int marker = b[1];
+    if (marker == 0xFF) {  // fill byte: the marker follows
+      in.unget();
+      continue;
+    }
+    if (marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7) || marker == 0x01) continue;
+    if (!in.read(reinterpret_cast<char*>(b), 2)) return std::nullopt;
+    const uint32_t length = BigEndian(b, 2);
+    if (length < 2) return std::nullopt;
+    const bool frame =
+        marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (frame) {
+      if (!in.read(reinterpret_cast<char*>(b), 5)) return std::nullopt;
+      return cv::Size(static_cast<int>(BigEndian(b + 3, 2)), static_cast<int>(BigEndian(b + 1, 2)));
+    }
+    in.seekg(length - 2, std::ios::cur);
+  }
+  return std::nullopt;
+}
+
 }  // namespace
+
+std::optional<cv::Size> ReadImageSize(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char head[24];
+  if (!in.read(reinterpret_cast<char*>(head), 2)) return std::nullopt;
+  if (head[0] == 0xFF && head[1] == 0xD8) {
+    in.seekg(0);
+    return JpegSize(in);
+  }
+  if (head[0] == 'P' && head[1] >= '1' && head[1] <= '6') {  // Netpbm: "P5 <width> <height> ..."
+    std::string w, h;
+    if (!NextToken(in, &w) || !NextToken(in, &h)) return std::nullopt;
+    try {
+      size_t used_w = 0, used_h = 0;
+      const int width = std::stoi(w, &used_w), height = std::stoi(h, &used_h);
+      if (used_w != w.size() || used_h != h.size()) return std::nullopt;
+      return cv::Size(width, height);
+    } catch (const std::exception&) {
+      return std::nullopt;
+    }
+  }
+  // PNG: the 8-byte signature, then the IHDR chunk (length, "IHDR", width, height).
+  static const unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  if (!in.read(reinterpret_cast<char*>(head) + 2, 22) || std::memcmp(head, kPng, 8) != 0 ||
+      std::memcmp(head + 12, "IHDR", 4) != 0)
+    return std::nullopt;
+  const uint32_t width = BigEndian(head + 16, 4), height = BigEndian(head + 20, 4);
+  if (width > static_cast<uint32_t>(INT32_MAX) || height > static_cast<uint32_t>(INT32_MAX))
+    return std::nullopt;
+  return cv::Size(static_cast<int>(width), static_cast<int>(height));
+}
 
 cv::Mat ReadColorImage(const std::string& path) {
   RequireFile(path);

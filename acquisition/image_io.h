@@ -2,6 +2,7 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 
 namespace gf {
@@ -13,6 +14,11 @@ cv::Mat ReadColorImage(const std::string& path);
 // 16-bit single-channel depth image (PNG or PGM) as CV_16UC1. Throws InputError when the file is
 // missing, cannot be decoded, or is not 16-bit single-channel (e.g. an 8-bit PNG).
 cv::Mat ReadDepthImage(const std::string& path);
+
+// An image's size read from its header alone (PNG, JPEG, PGM/PPM), without decoding or allocating
+// its pixels; std::nullopt for another format or a header that cannot be read (decoding the file
+// then tells what is wrong with it).
+std::optional<cv::Size> ReadImageSize(const std::string& path);
 
 // Binary PGM (P5) with maxval > 255. The Netpbm standard says big-endian, but some tools (the NYU
 // Depth raw dumps, libfreenect's fakenect) write little-endian. kAuto picks the byte order whose

@@ -19,6 +19,7 @@
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "acquisition/json_text.h"
 #include "apps/interrupt.h"
 #include "apps/progress.h"
 
@@ -209,7 +210,7 @@ void WriteState(RunFolder* out, const Running& r, bool ok, double seconds) {
                       {"fingerprint", r.fingerprint},
                       {"error", ok ? json() : json(LastError(log))},
                       {"log", fs::path(log).filename().string()}};
-  WriteTextFileAtomically(out->File("batch/" + r.capture.name + ".json"), state.dump(2) + "\n");
+  WriteTextFileAtomically(out->File("batch/" + r.capture.name + ".json"), JsonText(state) + "\n");
 }
 
 }  // namespace
@@ -267,7 +268,7 @@ void WriteBatchManifest(RunFolder* out, const std::vector<BatchCapture>& capture
   for (const BatchCapture& c : captures)
     list.push_back({{"name", c.name}, {"input", c.input}, {"config", c.config_file}});
   WriteTextFileAtomically(out->File("batch/manifest.json"),
-                          json({{"captures", list}}).dump(2) + "\n");
+                          JsonText(json({{"captures", list}})) + "\n");
 }
 
 std::unique_ptr<RunFolder> OpenBatchFolder(const std::string& out_dir, const std::string& manifest,

@@ -14,6 +14,7 @@
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
 #include "acquisition/run_folder.h"
+#include "acquisition/json_text.h"
 #include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
 #include "pipeline/run_sink.h"
@@ -227,7 +228,7 @@ ColmapImportSummary RunColmapImport(const std::string& workspace, const std::str
   report["poses"] = summary.poses;
   report["depth_maps"] = maps;
   report["filled_pixels"] = summary.filled_pixels;
-  WriteTextFileAtomically(run.File("colmap_import.json"), report.dump(2) + "\n");
+  WriteTextFileAtomically(run.File("colmap_import.json"), JsonText(report) + "\n");
   return summary;
 }
 

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "acquisition/errors.h"
+#include "acquisition/json_text.h"
 #include "acquisition/trajectory_metrics.h"
 #include "apps/bench.h"
 #include "apps/capture.h"
@@ -52,7 +53,7 @@ void AddPrintConfig(CLI::App* cmd, const std::string* config_file,
       [config_file, pipeline] {
         ReconstructionOptions o = *pipeline;
         if (!config_file->empty()) ApplyConfigFile(*config_file, &o);
-        std::cout << SettingsToJson(o).dump(2) << std::endl;
+        std::cout << JsonText(SettingsToJson(o)) << std::endl;
         throw CLI::Success();
       },
       "print every setting as the JSON --config reads (after --config FILE) and exit");
@@ -75,7 +76,7 @@ void AddInfoCommand(CLI::App& app) {
     progress.Finish();
     for (const auto& w : info["warnings"])
       std::fprintf(stderr, "warning: %s: %s\n", args->input.c_str(), w.get<std::string>().c_str());
-    std::cout << info.dump(2) << std::endl;
+    std::cout << JsonText(info) << std::endl;
   });
 }
 
@@ -127,8 +128,8 @@ void AddReconstructCommand(CLI::App& app) {
       "also mesh.ply.");
   AddInputArgs(cmd, args.get());
   cmd->add_option("--out", options->out_dir, "run folder")->required();
-  cmd->add_option("--frames", *range,
-                  "frames A:B (A included, B excluded), A: from A, or N the first N");
+  CLI::Option* frames = cmd->add_option(
+      "--frames", *range, "frames A:B (A included, B excluded), A: from A, or N the first N");
   auto no_fill = std::make_shared<bool>(false);
   cmd->add_flag("--no-fill", *no_fill, "no stereo hole filling of keyframes (sensor depth only)");
   auto no_fusion = std::make_shared<bool>(false);
@@ -155,7 +156,7 @@ void AddReconstructCommand(CLI::App& app) {
                 "folder without the marker, or the input, is never replaced)");
   cmd->add_flag("--allow-lost", options->allow_lost,
                 "accept a run that loses tracking on most frames (exit 0 with a warning)");
-  cmd->callback([options, args, range, no_fill, no_fusion, no_loops, sweep_all] {
+  cmd->callback([options, args, range, frames, no_fill, no_fusion, no_loops, sweep_all] {
     if (!options->config_file.empty()) ApplyConfigFile(options->config_file, &options->pipeline);
     if (*sweep_all) options->pipeline.fill_options.stereo.plane_sweep_always = true;
     options->pipeline.fill = !*no_fill;
@@ -164,7 +165,7 @@ void AddReconstructCommand(CLI::App& app) {
     options->input = args->input;
     options->source = args->ToOptions();
     options->source.load_color = options->pipeline.tracker.use_features || options->pipeline.fill;
-    if (!range->empty())
+    if (frames->count() > 0)  // given, even as "": ParseFrameRange refuses a range of no frames
       ParseFrameRange(*range, &options->pipeline.first_frame, &options->pipeline.end_frame);
     const InterruptHandler interrupt;  // Ctrl-C: stop, write the partial run, exit 130
     options->interrupt = interrupt.signal();
@@ -190,8 +191,8 @@ void AddCompareCommand(CLI::App& app) {
       "(run folders), DIR/compare.json, DIR/report.html.");
   AddInputArgs(cmd, args.get());
   cmd->add_option("--out", options->out_dir, "comparison folder")->required();
-  cmd->add_option("--frames", *range,
-                  "frames A:B (A included, B excluded), A: from A, or N the first N");
+  CLI::Option* frames = cmd->add_option(
+      "--frames", *range, "frames A:B (A included, B excluded), A: from A, or N the first N");
   cmd->add_option("--config", options->config_file, "JSON file of settings, as for reconstruct");
   AddPrintConfig(cmd, &options->config_file, &options->pipeline);
   cmd->add_flag("--force", options->force,
@@ -199,11 +200,11 @@ void AddCompareCommand(CLI::App& app) {
                 ".glassfusion-run lists");
   cmd->add_flag("--allow-lost", options->allow_lost,
                 "accept a run that loses tracking on most frames");
-  cmd->callback([options, args, range] {
+  cmd->callback([options, args, range, frames] {
     if (!options->config_file.empty()) ApplyConfigFile(options->config_file, &options->pipeline);
     options->input = args->input;
     options->source = args->ToOptions();
-    if (!range->empty())
+    if (frames->count() > 0)
       ParseFrameRange(*range, &options->pipeline.first_frame, &options->pipeline.end_frame);
     const InterruptHandler interrupt;
     options->interrupt = interrupt.signal();
@@ -224,8 +225,8 @@ void AddBenchCommand(CLI::App& app) {
       "Example: glassfusion bench tum_fr1_xyz_head --fill-every 3\nWrites: a table and JSON on "
       "stdout: ms per frame, fps and ATE per method, the machine's cores, the loop stage's cost.");
   AddInputArgs(cmd, args.get());
-  cmd->add_option("--frames", *range,
-                  "frames A:B (A included, B excluded), A: from A, or N the first N");
+  CLI::Option* frames = cmd->add_option(
+      "--frames", *range, "frames A:B (A included, B excluded), A: from A, or N the first N");
   cmd->add_option("--gt", options->gt, "ground truth (default: INPUT/groundtruth.txt or .log)");
   cmd->add_flag("--no-peers", *no_peers, "time GlassFusion only");
   cmd->add_option("--fill-every", options->fill_every,
@@ -243,13 +244,13 @@ void AddBenchCommand(CLI::App& app) {
   cmd->add_option("--config", *config,
                   "JSON file of tracker and fill settings, as for reconstruct");
   AddPrintConfig(cmd, config.get(), &options->pipeline);
-  cmd->callback([options, args, range, no_peers, no_loops, config] {
+  cmd->callback([options, args, range, frames, no_peers, no_loops, config] {
     if (!config->empty()) ApplyConfigFile(*config, &options->pipeline);
     options->input = args->input;
     options->source = args->ToOptions();
     options->peers = !*no_peers;
     options->loop_closure = !*no_loops;
-    if (!range->empty()) ParseFrameRange(*range, &options->first_frame, &options->end_frame);
+    if (frames->count() > 0) ParseFrameRange(*range, &options->first_frame, &options->end_frame);
     const auto j = RunBench(*options);
     std::printf("%-36s %8s %8s %10s %8s\n", "method", "ms", "fps", "ATE (cm)", "failed");
     for (const auto& m : j["methods"]) {
@@ -277,7 +278,7 @@ void AddBenchCommand(CLI::App& app) {
           f["opencv_sgbm_pairs"].get<int>());
     }
     std::printf("%d frames, %u cores\n", j["frames"].get<int>(), j["cores"].get<unsigned>());
-    std::cout << j.dump(2) << std::endl;
+    std::cout << JsonText(j) << std::endl;
   });
 }
 
@@ -337,7 +338,7 @@ void AddEvalCommand(CLI::App& app) {
       j["completeness"] = m["completeness"];
       j["accuracy"] = m["accuracy"];
     }
-    std::cout << j.dump(2) << std::endl;
+    std::cout << JsonText(j) << std::endl;
   });
 }
 
@@ -353,12 +354,13 @@ void AddCaptureCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--out", options->out_dir, "TUM folder to create")->required();
   auto frames = std::make_shared<std::string>();
-  cmd->add_option("--frames", *frames,
-                  "frames to record: N (or 0:N); default until the end or "
-                  "Ctrl-C");
+  CLI::Option* frames_option =
+      cmd->add_option("--frames", *frames,
+                      "frames to record: N (or 0:N); default until the end or "
+                      "Ctrl-C");
   cmd->add_option("--camera", options->camera_file, "camera.json to use instead of the device's");
-  cmd->callback([options, frames] {
-    if (!frames->empty()) options->frames = FrameCountOf(*frames, "capture");
+  cmd->callback([options, frames, frames_option] {
+    if (frames_option->count() > 0) options->frames = FrameCountOf(*frames, "capture");
     RunCapture(*options);
   });
 }

@@ -12,6 +12,7 @@
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
 #include "acquisition/run_folder.h"
+#include "acquisition/json_text.h"
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
 #include "apps/report_html.h"
@@ -216,7 +217,7 @@ CompareSummary RunCompare(const ReconstructOptions& given) {
     c[v]["accuracy"] = truth["accuracy"];
     c["ate_m"] = truth["ate_m"];
   }
-  WriteTextFileAtomically(folder.File("compare.json"), c.dump(2) + "\n");
+  WriteTextFileAtomically(folder.File("compare.json"), JsonText(c) + "\n");
   WriteRenderings(&folder, source->camera(),
                   ReadTumTrajectory((out / "with_fill/trajectory.txt").string()));
   HtmlReport r("GlassFusion: the model with and without the stereo fill");

@@ -11,6 +11,7 @@
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
 #include "acquisition/run_folder.h"
+#include "acquisition/json_text.h"
 #include "acquisition/stats.h"
 #include "apps/compare.h"
 #include "apps/info.h"
@@ -320,7 +321,7 @@ void RunDemo(const DemoOptions& options) {
   r.Heading("The model (glassfusion compare)");
   AddComparisonSections(&r, compare_dir, "compare/");
   AddDatasetSection(&r, data_dir, datasets);
-  WriteTextFileAtomically(folder.File("report.json"), report.dump(2) + "\n");
+  WriteTextFileAtomically(folder.File("report.json"), JsonText(report) + "\n");
   WriteTextFileAtomically(folder.File("report.html"), r.Html());
   std::cout << "demo: glass-table " << synth_summary.BriefReport() << "; " << c.BriefReport()
             << "; report in " << (out / "report.html").string() << std::endl;

@@ -26,6 +26,10 @@ bool ReconstructOptions::Check(std::string* message) const {
 }
 
 void ParseFrameRange(const std::string& range, int* first, int* end) {
+  // An empty range, or ":" with neither end, names no frames: the whole capture is had by leaving
+  // --frames out, never by a range that says nothing.
+  if (range.empty() || range == ":")
+    throw InputError("--frames", "\"" + range + "\" names no frames: give N, A:B or A:");
   const size_t colon = range.find(':');
   // Whole numbers only: "1e3" must not silently read as 1.
   auto number = [&](const std::string& text, int if_empty) {

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "acquisition/file_util.h"
+#include "acquisition/json_text.h"
 #include "acquisition/trajectory_metrics.h"
 #include "pipeline/run_sink.h"
 
@@ -212,7 +213,7 @@ void AddSettings(HtmlReport* r, const json& report) {
   if (!CommandLine().empty()) r->Details("the command that made this report", CommandLine());
   if (report.contains("config"))
     r->Details("every setting (report.json \"config\"; --config reads its \"settings\")",
-               report["config"].dump(2));
+               JsonText(report["config"]));
 }
 
 void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& prefix) {

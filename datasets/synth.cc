@@ -17,6 +17,7 @@
 #include "acquisition/file_util.h"
 #include "acquisition/frame_sink.h"
 #include "acquisition/image_io.h"
+#include "acquisition/json_text.h"
 #include "acquisition/trajectory.h"
 
 namespace fs = std::filesystem;
@@ -362,7 +363,7 @@ SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out
   j["materials"] = {"diffuse", "glossy", "dark", "textured_glass", "clear_glass"};
   j["sensor_hole_fraction"] = summary.hole_fraction;
   j["seconds_per_frame"] = summary.seconds_per_frame;
-  WriteTextFileAtomically((stage / "synth.json").string(), j.dump(2) + "\n");
+  WriteTextFileAtomically((stage / "synth.json").string(), JsonText(j) + "\n");
 
   PublishFolder(stage.string(), out_dir);
   cleanup.armed = false;

@@ -6,17 +6,16 @@
 #include <chrono>
 #include <thread>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "acquisition/stats.h"
 
 namespace gf {
 
 bool FillStageOptions::Check(std::string* message) const {
-  if (queue_capacity < 1) {
-    if (message) *message = "fill queue_capacity must be positive";
-    return false;
-  }
-  return Filler().Check(message);
+  FieldCheck c(message);
+  c.In("queue_capacity", queue_capacity, 1, kMaxFramesInMemory, kMoreFramesThanMemory);
+  return c.ok() && Filler().Check(message);
 }
 
 KeyframeFillerOptions FillStageOptions::Filler() const {

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <limits>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "acquisition/stats.h"
 #include "pipeline/timing.h"
@@ -34,14 +35,12 @@ const char* SourceName(size_t source) {
 }  // namespace
 
 bool FusionStageOptions::Check(std::string* message) const {
-  if (queue_capacity < 1 || count_every < 1 || completion_max_gap_px < 0) {
-    if (message)
-      *message =
-          "fusion stage: queue_capacity and count_every must be positive, "
-          "completion_max_gap_px non-negative";
-    return false;
-  }
-  return fusion.Check(message);
+  FieldCheck c(message);
+  c.In("queue_capacity", queue_capacity, 1, kMaxFramesInMemory, kMoreFramesThanMemory)
+      .In("count_every", count_every, 1, kMaxCaptureFrames, kMoreFramesThanACapture)
+      .In("completion_max_gap_px", completion_max_gap_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .Part("fusion", fusion);
+  return c.ok();
 }
 
 json SurfelReport(const SurfelFusion& fusion, const std::vector<json>& over_time) {

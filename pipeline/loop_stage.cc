@@ -6,6 +6,7 @@
 #include <chrono>
 #include <mutex>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "pipeline/timing.h"
 
@@ -37,15 +38,18 @@ std::string ReasonKind(const std::string& reason) {
 }  // namespace
 
 bool LoopStageOptions::Check(std::string* message) const {
-  if (queue_capacity < 1 || !odometry_noise.Check() || !(gap_sigma_m > 0) || !(gap_sigma_deg > 0) ||
-      relocalise_candidates < 1 || free_keyframes < 1) {
-    if (message)
-      *message =
-          "loop closure: positive queue capacity, floors, gap sigmas, candidates and "
-          "free keyframes";
-    return false;
-  }
-  return database.Check(message) && detector.Check(message) && graph.Check(message);
+  FieldCheck c(message);
+  c.In("queue_capacity", queue_capacity, 1, kMaxFramesInMemory, kMoreFramesThanMemory)
+      .Part("odometry_noise", odometry_noise)
+      .Above("gap_sigma_m", gap_sigma_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("gap_sigma_deg", gap_sigma_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .In("relocalise_candidates", relocalise_candidates, 1, kMaxCaptureFrames,
+          kMoreFramesThanACapture)
+      .In("free_keyframes", free_keyframes, 1, kMaxCaptureFrames, kMoreFramesThanACapture)
+      .Part("database", database)
+      .Part("detector", detector)
+      .Part("graph", graph);
+  return c.ok();
 }
 
 LoopClosureStage::LoopClosureStage(const Camera& camera, const LoopStageOptions& options,

@@ -12,6 +12,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/json_text.h"
 #include "surfels/ply.h"
 
 namespace fs = std::filesystem;
@@ -212,7 +213,7 @@ void FolderRunSink::WriteCamera(const CameraFile& camera) {
 }
 
 void FolderRunSink::WriteReport(const nlohmann::ordered_json& report) {
-  WriteTextFileAtomically(File("report.json"), report.dump(2) + "\n");
+  WriteTextFileAtomically(File("report.json"), JsonText(report) + "\n");
 }
 
 void FolderRunSink::WriteMap(const std::vector<Surfel>& surfels) {

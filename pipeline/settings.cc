@@ -1,5 +1,8 @@
 #include "pipeline/settings.h"
 
+#include <cstdint>
+#include <limits>
+
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 
@@ -97,6 +100,13 @@ nlohmann::json SettingsTree(const ReconstructionOptions& o) {
           {"loop_closure", o.loop_options}};
 }
 
+bool FitsAnInt(const nlohmann::json& value) {
+  if (value.is_number_unsigned())
+    return value.get<uint64_t>() <= static_cast<uint64_t>(std::numeric_limits<int>::max());
+  const int64_t v = value.get<int64_t>();
+  return v >= std::numeric_limits<int>::min() && v <= std::numeric_limits<int>::max();
+}
+
 // Checks `given` (the file's tree) against `known` (every setting, current values): same keys,
 // objects where objects are, and values of the same kind. `where` is the dotted path so far.
 void CheckAgainst(const nlohmann::json& given, const nlohmann::json& known,
@@ -113,13 +123,16 @@ void CheckAgainst(const nlohmann::json& given, const nlohmann::json& known,
     if (!given.is_boolean()) throw InputError(path, name + " must be true or false");
   } else if (known.is_number_integer()) {
     if (!given.is_number_integer()) throw InputError(path, name + " must be an integer");
+    // Integer settings are ints (max_surfels' bound fits one too): a larger number would wrap.
+    if (!FitsAnInt(given))
+      throw InputError(path, name + " " + given.dump() + " is beyond any integer setting");
   } else if (known.is_number()) {
     if (!given.is_number()) throw InputError(path, name + " must be a number");
   } else if (known.is_array()) {
     if (!given.is_array() || given.empty())
       throw InputError(path, name + " must be a non-empty list of integers");
     for (const auto& v : given)
-      if (!v.is_number_integer())
+      if (!v.is_number_integer() || !FitsAnInt(v))
         throw InputError(path, name + " must be a non-empty list of integers");
   }
 }
@@ -135,7 +148,8 @@ void ApplyConfig(const std::string& text, const std::string& path, Reconstructio
   nlohmann::json given;
   try {
     given = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {
+    // parse_error, and out_of_range for a number beyond a double (1e400).
     throw InputError(path, std::string("not valid JSON: ") + e.what());
   }
   nlohmann::json merged = SettingsTree(*options);
@@ -156,10 +170,11 @@ void ApplyConfig(const std::string& text, const std::string& path, Reconstructio
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path, std::string("bad setting: ") + e.what());
   }
-  // In order, stopping at the first refusal: its message is the one reported.
+  // In order, stopping at the first refusal: its message, which starts with the field's name
+  // within the part, is the one reported after the part's place in the tree.
   std::string problem;
   auto refuse = [&](const char* name) {
-    throw InputError(path, std::string("settings refused (") + name + "): " + problem);
+    throw InputError(path, std::string(name) + "." + problem);
   };
   if (!o.tracker.Check(&problem)) refuse("tracker");
   if (!f.geometry.Check(&problem)) refuse("fill.geometry");

@@ -28,9 +28,11 @@ namespace gf {
 nlohmann::ordered_json SettingsToJson(const ReconstructionOptions& options);
 
 // Overrides the options with the settings in the JSON text `text`. Throws InputError naming `path`
-// and the problem: not JSON, not an object, an unknown setting, a value of the wrong type (a
-// fraction for an integer, a number for true/false), or values that the options' Check() refuses.
-// On a throw the options are unchanged.
+// and the problem: not JSON (a number beyond a double too), not an object, an unknown setting, a
+// value of the wrong type (a fraction for an integer, a number for true/false, an integer beyond
+// an int), or values that the options' Check() refuses, named by their place in the tree
+// ("fusion.fusion.normal_filter_px 30000 is larger than any half-size image (at most 2048)").
+// Every number has an upper bound (acquisition/bounds.h). On a throw the options are unchanged.
 void ApplyConfig(const std::string& text, const std::string& path, ReconstructionOptions* options);
 
 // ApplyConfig on the file at `path`; a missing or unreadable file is an InputError too.

@@ -2,6 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
 #include "acquisition/errors.h"
 #include "pipeline/reconstruction.h"
 
@@ -86,16 +91,15 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
   EXPECT_EQ(Problem(R"({"fill": )", &options).rfind("not valid JSON", 0), 0u);
   // Values of the right kind that the options' Check() refuses.
   EXPECT_EQ(Problem(R"({"fill": {"stereo": {"sgbm": {"block_size": 4}}}})", &options),
-            "settings refused (fill.stereo): block_size must be odd");
-  // Two refusals: the first one's stage and message (the fill stage's own check, which also
+            "fill.stereo.sgbm.block_size must be odd");
+  // Two refusals: the first one's setting and message (the fill stage's own check, which also
   // refuses this search range, comes after the stereo's).
   EXPECT_EQ(Problem(R"({"fill": {"stereo": {"sgbm": {"block_size": 4, "num_disparities": 16}}}})",
                     &options),
-            "settings refused (fill.stereo): block_size must be odd");
+            "fill.stereo.sgbm.block_size must be odd");
   // The fill stage's own check: pair selection's near disparity beyond SGBM's search.
   EXPECT_EQ(Problem(R"({"fill": {"pairs": {"max_near_disparity_px": 200}}})", &options),
-            "settings refused (fill): pairs.max_near_disparity_px exceeds "
-            "stereo.sgbm.num_disparities");
+            "fill.pairs.max_near_disparity_px exceeds stereo.sgbm.num_disparities");
   // The old place of a setting is refused: the pair geometry is one setting, fill.geometry.
   EXPECT_EQ(Problem(R"({"fill": {"pairs": {"epipole_margin_px": 60}}})", &options),
             "unknown setting 'fill.pairs.epipole_margin_px'");
@@ -103,6 +107,64 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
   EXPECT_EQ(Problem(R"({"fill": {"geometry": {"epipole_margin_px": 60}}})", &options), "");
   EXPECT_EQ(options.fill_options.Filler().pairs.geometry.epipole_margin_px, 60);
   EXPECT_EQ(options.fill_options.Filler().stereo.geometry.epipole_margin_px, 60);
+}
+
+// Values beyond a bound with a meaning are refused, naming the setting by its place in the tree.
+TEST(Config, RefusesValuesBeyondTheirBoundsNamingTheSetting) {
+  ReconstructionOptions options;
+  EXPECT_EQ(Problem(R"({"fusion": {"fusion": {"normal_filter_px": 30000}}})", &options),
+            "fusion.fusion.normal_filter_px 30000 is larger than any half-size image (at most "
+            "2048)");
+  EXPECT_EQ(Problem(R"({"fill": {"pairs": {"refine": {"photometric_iterations": [100000, 7]}}}})",
+                    &options),
+            "fill.pairs.refine.photometric_iterations[0] 100000 is more iterations than a "
+            "frame's time allows (at most 1000)");
+  EXPECT_EQ(Problem(R"({"fusion": {"fusion": {"max_surfels": 2000000000}}})", &options),
+            "fusion.fusion.max_surfels 2000000000 takes more than the map's 16 GiB at 48 bytes "
+            "a surfel (at most 357913941)");
+  EXPECT_EQ(Problem(R"({"tracker": {"icp": {"max_distance_m": -1}}})", &options),
+            "tracker.icp.max_distance_m -1 must be more than 0");
+  EXPECT_EQ(Problem(R"({"loop_closure": {"detector": {"verification": {"noise": {"bias": 50}}}}})",
+                    &options)
+                .rfind("loop_closure.detector.verification.noise.bias 50 ", 0),
+            0u);
+  // An integer beyond an int would wrap when read: refused before.
+  EXPECT_EQ(Problem(R"({"fusion": {"fusion": {"pixel_step": 4294967297}}})", &options),
+            "'fusion.fusion.pixel_step' 4294967297 is beyond any integer setting");
+  // A number beyond a double is no valid JSON number for us either (nlohmann: out_of_range).
+  EXPECT_EQ(Problem(R"({"tracker": {"max_jump_m": 1e400}})", &options).rfind("not valid JSON", 0),
+            0u);
+  EXPECT_EQ(SettingsToJson(options), SettingsToJson(ReconstructionOptions()));
+}
+
+// Every number in the settings tree has an upper bound: set to 1e12 (integers to 2e9, lists'
+// elements too) it is refused, and the message names it. No setting is exempt.
+TEST(Config, EveryNumericSettingHasAnUpperBound) {
+  const nlohmann::json tree = nlohmann::json::parse(SettingsToJson(ReconstructionOptions()).dump());
+  std::vector<std::pair<std::string, nlohmann::json::json_pointer>> numbers;
+  std::function<void(const nlohmann::json&, const nlohmann::json::json_pointer&, std::string)>
+      walk = [&](const nlohmann::json& j, const nlohmann::json::json_pointer& at,
+                 const std::string& name) {
+        if (j.is_object()) {
+          for (const auto& [key, value] : j.items())
+            walk(value, at / key, name.empty() ? key : name + "." + key);
+        } else if (j.is_array()) {
+          for (size_t i = 0; i < j.size(); ++i) walk(j[i], at / i, name);
+        } else if (j.is_number()) {
+          numbers.emplace_back(name, at);
+        }
+      };
+  walk(tree, nlohmann::json::json_pointer(), "");
+  EXPECT_GT(numbers.size(), 150u);  // the tree holds about 170 numbers
+  for (const auto& [name, at] : numbers) {
+    nlohmann::json changed = tree;
+    const bool integer = tree[at].is_number_integer();
+    changed[at] = integer ? nlohmann::json(2'000'000'000) : nlohmann::json(1e12);
+    ReconstructionOptions options;
+    const std::string problem = Problem(changed.dump(), &options);
+    EXPECT_NE(problem.find(name), std::string::npos)
+        << name << " = " << changed[at] << ": " << (problem.empty() ? "accepted" : problem);
+  }
 }
 
 TEST(Config, MissingFileIsAnInputError) {

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <opencv2/core/utility.hpp>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 
 namespace gf {
@@ -99,24 +100,28 @@ DenseAccumulator AccumulateDense(const DenseLevel& l, int row_begin, int row_end
 }  // namespace
 
 bool IcpOptions::Check(std::string* message) const {
-  auto fail = [&](const char* m) {
-    if (message) *message = m;
-    return false;
-  };
-  if (iterations.empty()) return fail("iterations: need at least one level");
-  for (int i : iterations)
-    if (i < 0) return fail("iterations must be >= 0");
-  if (!(max_distance_m > 0) || !(max_normal_angle_deg > 0 && max_normal_angle_deg <= 180))
-    return fail("need max_distance_m > 0 and 0 < max_normal_angle_deg <= 180");
-  if (!(noise_a_m > 0) || !(noise_b_per_m >= 0))
-    return fail("need noise_a_m > 0 and noise_b_per_m >= 0");
-  if (!(plane_sigma_m > 0) || !(plane_huber > 0) || !(feature_sigma_px > 0) ||
-      !(feature_huber > 0) || !(feature_weight >= 0))
-    return fail("sigmas and Huber thresholds must be positive, feature_weight >= 0");
-  if (feature_min_level < 0) return fail("feature_min_level must be >= 0");
-  if (min_inliers < 0 || !(max_rmse_m > 0) || !(convergence_step > 0))
-    return fail("need min_inliers >= 0, max_rmse_m > 0, convergence_step > 0");
-  return true;
+  FieldCheck c(message);
+  c.Each("iterations", iterations, 0, kMaxIterations, kMoreIterationsThanAFrameAllows)
+      .Above("max_distance_m", max_distance_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Above("max_normal_angle_deg", max_normal_angle_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .Above("plane_sigma_m", plane_sigma_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      // The noise model's sigma(z) = a + b (z - 0.4)^2: a sensor whose noise reaches the whole
+      // range of depths measures nothing.
+      .Above("noise_a_m", noise_a_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .In("noise_b_per_m", noise_b_per_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Above("plane_huber", plane_huber, 0, kMaxSigmas, kMoreSigmasThanMeasurable)
+      .Above("feature_sigma_px", feature_sigma_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .Above("feature_huber", feature_huber, 0, kMaxSigmas, kMoreSigmasThanMeasurable)
+      .In("feature_weight", feature_weight, 0, kMaxRelativeWeight, kOutweighsBeyondRounding)
+      // Levels of a pyramid that halves an image of at most 4096 pixels down to one pixel.
+      .In("feature_min_level", feature_min_level, 0, kMaxPyramidLevels, kMoreLevelsThanAnyPyramid)
+      .In("min_inliers", min_inliers, 0, kMaxImagePixels, kMoreThanAnImagesPixels)
+      .Above("max_rmse_m", max_rmse_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      // A step of a metre or a radian (57 degrees) per iteration is no convergence.
+      .Above("convergence_step", convergence_step, 0, 1,
+             "is a step of more than a metre or a "
+             "radian, no convergence");
+  return c.ok();
 }
 
 std::string IcpSummary::BriefReport() const {

@@ -44,7 +44,9 @@ struct IcpOptions {
   int feature_min_level = 1;
   int min_inliers = 1000;          // fewer pairs at the finest level: failure
   double max_rmse_m = 0.03;        // larger final point-to-plane RMSE: failure
-  double convergence_step = 1e-6;  // stop a level when |xi| falls below, m / rad
+  double convergence_step = 1e-6;  // stop a level when |xi| falls below, m / rad (at most 1)
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

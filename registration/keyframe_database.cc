@@ -1,10 +1,11 @@
 #include "registration/keyframe_database.h"
 
 #include <algorithm>
+#include <cmath>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
-#include <cmath>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 
 namespace gf {
@@ -34,12 +35,15 @@ std::shared_ptr<const LoopKeyframe> MakeLoopKeyframe(int id, const RgbdFrame& fr
 }
 
 bool KeyframeDatabaseOptions::Check(std::string* message) const {
-  if (words < 2 || vocabulary_keyframes < 1 || kmeans_iterations < 1) {
-    if (message) *message = "keyframe database: need words >= 2, vocabulary_keyframes >= 1, "
-                            "kmeans_iterations >= 1";
-    return false;
-  }
-  return true;
+  // A word is a descriptor's centre (64 floats, 256 bytes): no more words than a keyframe has
+  // pixels (4 GiB of centres at that bound).
+  FieldCheck c(message);
+  c.In("words", words, 2, kMaxImagePixels, kMoreThanAnImagesPixels)
+      .In("vocabulary_keyframes", vocabulary_keyframes, 1, kMaxCaptureFrames,
+          kMoreFramesThanACapture)
+      .In("kmeans_iterations", kmeans_iterations, 1, kMaxIterations,
+          kMoreIterationsThanAFrameAllows);
+  return c.ok();
 }
 
 KeyframeDatabase::KeyframeDatabase(const KeyframeDatabaseOptions& options) : options_(options) {

@@ -50,9 +50,12 @@ std::shared_ptr<const LoopKeyframe> MakeLoopKeyframe(int id, const RgbdFrame& fr
                                                      std::shared_ptr<const FrameFeatures> features);
 
 struct KeyframeDatabaseOptions {
-  int words = 500;                 // visual words in the vocabulary (fewer if few descriptors)
+  // Visual words in the vocabulary (fewer if few descriptors); at most an image's pixels.
+  int words = 500;
   int vocabulary_keyframes = 10;   // the first keyframes, whose descriptors train it
   int kmeans_iterations = 10;      // Lloyd iterations of the clustering (k-means++ seeding)
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "registration/depth_pyramid.h"
 
@@ -66,14 +67,18 @@ double WeakestTranslationSigma(const Matrix6d& information) {
 }  // namespace
 
 bool LoopVerificationOptions::Check(std::string* message) const {
-  if (!(min_inlier_ratio >= 0 && min_inlier_ratio <= 1) || !(min_spread_m >= 0) ||
-      !(min_overlap >= 0 && min_overlap <= 1) || !(max_refine_m > 0) || !(max_refine_deg > 0) ||
-      !(max_sigma_m > 0) || !noise.Check()) {
-    if (message)
-      *message = "loop verification: ratios and overlap in [0, 1], positive limits and floors";
-    return false;
-  }
-  return match.Check(message) && ransac.Check(message) && icp.Check(message);
+  FieldCheck c(message);
+  c.In("min_inlier_ratio", min_inlier_ratio, 0, 1, kMoreThanOne)
+      .In("min_spread_m", min_spread_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .In("min_overlap", min_overlap, 0, 1, kMoreThanOne)
+      .Above("max_refine_m", max_refine_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("max_refine_deg", max_refine_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .Above("max_sigma_m", max_sigma_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Part("noise", noise)
+      .Part("match", match)
+      .Part("ransac", ransac)
+      .Part("icp", icp);
+  return c.ok();
 }
 
 std::string LoopVerification::BriefReport() const {
@@ -161,14 +166,22 @@ LoopVerification VerifyLoop(const LoopKeyframe& query, const LoopKeyframe& candi
 }
 
 bool LoopDetectorOptions::Check(std::string* message) const {
-  if (recent_keyframes < 0 || appearance_candidates < 0 || proximity_candidates < 0 ||
-      !(min_appearance_score >= 0) || !(proximity_m > 0) || !(proximity_deg > 0) ||
-      !(confirm_m > 0) || !(confirm_deg > 0) || min_consistent < 1) {
-    if (message)
-      *message = "loop detector: non-negative counts, positive distances, min_consistent >= 1";
-    return false;
-  }
-  return verification.Check(message);
+  // Counts of keyframes (candidates, the recent ones, consistent ones) are bounded by a capture's.
+  FieldCheck c(message);
+  c.In("recent_keyframes", recent_keyframes, 0, kMaxCaptureFrames, kMoreFramesThanACapture)
+      .In("appearance_candidates", appearance_candidates, 0, kMaxCaptureFrames,
+          kMoreFramesThanACapture)
+      // Histogram intersection of normalised histograms: 0-1.
+      .In("min_appearance_score", min_appearance_score, 0, 1, kMoreThanOne)
+      .In("proximity_candidates", proximity_candidates, 0, kMaxCaptureFrames,
+          kMoreFramesThanACapture)
+      .Above("proximity_m", proximity_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("proximity_deg", proximity_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .Above("confirm_m", confirm_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("confirm_deg", confirm_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .In("min_consistent", min_consistent, 1, kMaxCaptureFrames, kMoreFramesThanACapture)
+      .Part("verification", verification);
+  return c.ok();
 }
 
 std::string LoopDetection::BriefReport() const {

@@ -61,6 +61,8 @@ struct LoopVerificationOptions {
   // Errors the alignment's own information leaves out (depth calibration, rolling shutter,
   // correlated noise), added to its covariance for the pose graph (pose_graph.h).
   AlignmentNoise noise;
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -90,6 +92,8 @@ struct LoopDetectorOptions {
   double confirm_m = 0.02;    // a loop moving the query less than this agrees with the graph
   double confirm_deg = 1.5;   // ... and less than this, degrees
   int min_consistent = 3;     // consecutive keyframes that must imply the same larger correction
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
 
+#include "acquisition/bounds.h"
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
 
@@ -75,16 +76,16 @@ void AddPhotometricStep(const StereoKeyframe& key1, const StereoKeyframe& key2,
 }
 
 bool PoseRefinementOptions::Check(std::string* message) const {
-  if (!(reprojection_px > 0) || min_inliers < 6 || !(max_change_m > 0) || !(max_change_deg > 0)) {
-    if (message) *message = "pose refinement: positive thresholds, min_inliers >= 6";
-    return false;
-  }
-  if (photometric_iterations.empty() || photometric_iterations.size() > 6 ||
-      *std::min_element(photometric_iterations.begin(), photometric_iterations.end()) < 0) {
-    if (message) *message = "pose refinement: 1 to 6 pyramid levels of photometric iterations >= 0";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.Above("reprojection_px", reprojection_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("min_inliers", min_inliers, 6, kMaxImagePixels, kMoreThanAnImagesPixels)
+      .Above("max_change_m", max_change_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("max_change_deg", max_change_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .Require(photometric_iterations.size() <= 6,
+               "photometric_iterations: at most 6 pyramid levels")
+      .Each("photometric_iterations", photometric_iterations, 0, kMaxIterations,
+            kMoreIterationsThanAFrameAllows);
+  return c.ok();
 }
 
 std::string PoseRefinement::BriefReport() const {

@@ -43,6 +43,8 @@ struct PoseRefinementOptions {
   // Its Gauss-Newton iterations per image-pyramid level, the full-size image first (each level
   // halves the size). OpenCV's own default; the full-size level costs about three quarters.
   std::vector<int> photometric_iterations = {7, 7, 7, 10};
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "registration/pose_graph_cost.h"
 
@@ -28,14 +29,14 @@ const char* EdgeKindName(PoseGraphEdge::Kind kind) {
 }
 
 bool PoseGraphOptions::Check(std::string* message) const {
-  if (!(max_loop_chi2 > 0) || !(loop_huber > 0) || max_iterations < 1 || max_rejections < 0) {
-    if (message)
-      *message =
-          "pose graph: need max_loop_chi2 > 0, loop_huber > 0, max_iterations >= 1, "
-          "max_rejections >= 0";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.Above("max_loop_chi2", max_loop_chi2, 0, kMaxSigmas * kMaxSigmas,
+          "is a squared residual of more standard deviations than any measurement lies out")
+      .Above("loop_huber", loop_huber, 0, kMaxSigmas, kMoreSigmasThanMeasurable)
+      .In("max_iterations", max_iterations, 1, kMaxIterations, kMoreIterationsThanAFrameAllows)
+      // Each rejection removes one loop edge, at most one per keyframe.
+      .In("max_rejections", max_rejections, 0, kMaxCaptureFrames, kMoreFramesThanACapture);
+  return c.ok();
 }
 
 std::string PoseGraphSummary::BriefReport() const {
@@ -70,11 +71,15 @@ Matrix6d InformationWithFloor(const Matrix6d& alignment_information, double sigm
 }
 
 bool AlignmentNoise::Check(std::string* message) const {
-  if (!(floor_m > 0) || !(floor_deg > 0) || !(bias >= 0)) {
-    if (message) *message = "alignment noise: positive floors, bias >= 0";
-    return false;
-  }
-  return true;
+  // bias 10: a standard deviation of ten times the viewpoint change, an edge that constrains
+  // nothing the scene's size does not.
+  FieldCheck c(message);
+  c.Above("floor_m", floor_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("floor_deg", floor_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .In("bias", bias, 0, 10,
+          "is a standard deviation of more than ten times the viewpoint "
+          "change");
+  return c.ok();
 }
 
 Matrix6d AlignmentInformation(const Matrix6d& alignment_information, const SE3& relative,

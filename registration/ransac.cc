@@ -5,17 +5,17 @@
 #include <opencv2/features2d.hpp>
 #include <random>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "acquisition/trajectory_metrics.h"
 
 namespace gf {
 
 bool MatchOptions::Check(std::string* message) const {
-  if (!(ratio > 0 && ratio <= 1)) {
-    if (message) *message = "ratio must be in (0, 1]";
-    return false;
-  }
-  return true;
+  // Distances are non-negative: best / second best is at most 1.
+  FieldCheck c(message);
+  c.Above("ratio", ratio, 0, 1, kMoreThanOne);
+  return c.ok();
 }
 
 std::vector<cv::DMatch> MatchDescriptors(const std::vector<cv::KeyPoint>& query_keypoints,
@@ -50,12 +50,17 @@ std::vector<cv::DMatch> MatchDescriptors(const std::vector<cv::KeyPoint>& query_
 }
 
 bool RansacOptions::Check(std::string* message) const {
-  if (!(inlier_threshold_m > 0) || !(confidence > 0 && confidence < 1) || max_iterations < 1 ||
-      min_inliers < 3) {
-    if (message) *message = "RANSAC: need threshold > 0, confidence in (0,1), min_inliers >= 3";
-    return false;
-  }
-  return true;
+  // A hypothesis (a 3-point fit, then a test of every correspondence) takes microseconds: a
+  // million of them take seconds per frame, more than its time allows.
+  constexpr int kMaxHypotheses = 1'000'000;
+  FieldCheck c(message);
+  c.Above("inlier_threshold_m", inlier_threshold_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("confidence", confidence, 0, 1, kMoreThanOne)
+      .Require(confidence < 1, "confidence must be less than 1 (certainty needs every sample)")
+      .In("max_iterations", max_iterations, 1, kMaxHypotheses,
+          "is more hypotheses than a frame's time allows")
+      .In("min_inliers", min_inliers, 3, kMaxImagePixels, kMoreThanAnImagesPixels);
+  return c.ok();
 }
 
 std::string RansacReport::BriefReport() const {

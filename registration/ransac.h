@@ -24,6 +24,8 @@ struct MatchOptions {
   double ratio = 0.8;          // best / second-best distance must be below this
   bool cross_check = false;    // keep only mutual best matches
   bool same_laplacian = true;  // only match keypoints with equal class_id (Laplacian sign)
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -37,9 +39,11 @@ std::vector<cv::DMatch> MatchDescriptors(const std::vector<cv::KeyPoint>& query_
 struct RansacOptions {
   double inlier_threshold_m = 0.03;  // correspondence distance after alignment, metres
   double confidence = 0.995;         // probability of drawing one all-inlier sample
-  int max_iterations = 1000;
+  int max_iterations = 1000;  // hypotheses; at most 1e6 (microseconds each: seconds per frame)
   int min_inliers = 10;  // fewer: failure
   uint32_t seed = 1;     // sampling is deterministic for a seed
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 
 namespace gf {
@@ -269,13 +270,14 @@ void Describe(const Integral& ii, const Candidate& k, double angle, float* descr
 }  // namespace
 
 bool SurfOptions::Check(std::string* message) const {
-  if (!(hessian_threshold >= 0) || octaves < 1 || octaves > 6 || initial_step < 1 ||
-      initial_step > 4 || max_features < 0) {
-    if (message)
-      *message = "SURF: need hessian_threshold >= 0, 1 <= octaves <= 6, 1 <= initial_step <= 4";
-    return false;
-  }
-  return true;
+  // Box-filter second derivatives of an image in [0, 1], normalised by the filter's area, are at
+  // most 2/3 (Dxy 2/9), so det(H) stays below 1: a larger threshold keeps no feature.
+  FieldCheck c(message);
+  c.In("hessian_threshold", hessian_threshold, 0, 1, "is more than det(H) of any image reaches")
+      .In("octaves", octaves, 1, 6, "is more octaves than SURF's filters fit in an image")
+      .In("initial_step", initial_step, 1, 4, "is coarser than SURF's first octave samples")
+      .In("max_features", max_features, 0, kMaxImagePixels, kMoreThanAnImagesPixels);
+  return c.ok();
 }
 
 SurfFeatures DetectAndDescribeSurf(const cv::Mat& gray, const SurfOptions& options) {

@@ -28,11 +28,15 @@
 namespace gf {
 
 struct SurfOptions {
-  double hessian_threshold = 0.0004;  // on det(H) of an image scaled to [0, 1]
+  // On det(H) of an image scaled to [0, 1], which stays below 1 (box-filter second derivatives
+  // normalised by the filter area are at most 2/3): at most 1.
+  double hessian_threshold = 0.0004;
   int octaves = 4;                    // octaves of the scale space
   int initial_step = 2;               // sampling step of the first octave, pixels (1 = every pixel)
   bool upright = false;               // U-SURF: no orientation (faster, not rotation invariant)
   int max_features = 1500;            // keep the strongest; 0 = all
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

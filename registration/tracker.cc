@@ -5,46 +5,47 @@
 #include <opencv2/imgproc.hpp>
 #include <utility>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "registration/rolling_shutter.h"
 
 namespace gf {
 
 bool KeyframePolicy::Check(std::string* message) const {
-  if (!(max_rotation_deg > 0) || !(max_translation_m > 0) ||
-      !(min_overlap >= 0 && min_overlap <= 1) || min_feature_inliers < 0) {
-    if (message) *message = "keyframe policy: need positive thresholds and min_overlap in [0, 1]";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.Above("max_rotation_deg", max_rotation_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .Above("max_translation_m", max_translation_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .In("min_overlap", min_overlap, 0, 1, kMoreThanOne)
+      .In("min_feature_inliers", min_feature_inliers, 0, kMaxImagePixels, kMoreThanAnImagesPixels);
+  return c.ok();
 }
 
 bool TrackerOptions::Check(std::string* message) const {
-  if (pyramid_levels < static_cast<int>(icp.iterations.size())) {
-    if (message) *message = "pyramid_levels must cover icp.iterations";
-    return false;
-  }
-  if (!(max_jump_m > 0) || !(max_jump_deg > 0)) {
-    if (message) *message = "max_jump_m and max_jump_deg must be positive";
-    return false;
-  }
   ReadoutOrder order;
-  if (!(depth_readout_s >= 0 && depth_readout_s < 1) ||
-      !ParseReadoutOrder(depth_readout_order, &order)) {
-    if (message)
-      *message = "depth_readout_s must be in [0, 1) seconds, depth_readout_order a known order";
-    return false;
-  }
-  if (relocalise_frames < 0 || !std::isfinite(simulated_drift_deg_per_m)) {
-    if (message) *message = "relocalise_frames must be >= 0, simulated drift finite";
-    return false;
-  }
-  if (!(restart_m > 0) || !(restart_deg > 0)) {
-    if (message) *message = "restart_m and restart_deg must be positive";
-    return false;
-  }
-  return icp.Check(message) && keyframes.Check(message) && surf.Check(message) &&
-         match.Check(message) && ransac.Check(message);
+  FieldCheck c(message);
+  c.In("pyramid_levels", pyramid_levels, 1, kMaxPyramidLevels, kMoreLevelsThanAnyPyramid)
+      .Require(pyramid_levels >= static_cast<int>(icp.iterations.size()),
+               "pyramid_levels must cover icp.iterations")
+      .Above("max_jump_m", max_jump_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("max_jump_deg", max_jump_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      // A readout of a second or more is no video sensor's.
+      .In("depth_readout_s", depth_readout_s, 0, 1, "is a readout longer than a second")
+      .Require(depth_readout_s < 1, "depth_readout_s must be less than a second")
+      .Require(ParseReadoutOrder(depth_readout_order, &order),
+               "depth_readout_order must be top_to_bottom, bottom_to_top, left_to_right or "
+               "right_to_left")
+      .In("relocalise_frames", relocalise_frames, 0, kMaxCaptureFrames, kMoreFramesThanACapture)
+      // A full turn per metre travelled: no drift worth simulating is larger.
+      .In("simulated_drift_deg_per_m", simulated_drift_deg_per_m, -360, 360,
+          "is more than a full turn per metre")
+      .Above("restart_m", restart_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("restart_deg", restart_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .Part("icp", icp)
+      .Part("keyframes", keyframes)
+      .Part("surf", surf)
+      .Part("match", match)
+      .Part("ransac", ransac);
+  return c.ok();
 }
 
 const char* TrackingStatusName(TrackingStatus status) {

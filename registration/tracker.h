@@ -45,6 +45,8 @@ struct KeyframePolicy {
   double max_translation_m = 0.02;  // ... or this translation, metres
   double min_overlap = 0.7;         // ... or when fewer of the frame's points land on it
   int min_feature_inliers = 25;     // ... or when fewer features match it (features on)
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -85,6 +87,8 @@ struct TrackerOptions {
   // travelled, added to each new keyframe's pose: simulated drift, to measure how much of it loop
   // closure removes.
   double simulated_drift_deg_per_m = 0.0;
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -4,25 +4,26 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "acquisition/bounds.h"
 #include "acquisition/depth.h"
 #include "acquisition/stats.h"
 
 namespace gf {
 
 bool DepthStepOptions::Check(std::string* message) const {
-  if (far_side_px < 0 || near_side_px < 0 || !(jump > 0)) {
-    if (message) *message = "depth steps: margins must be >= 0 and jump positive";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.Above("jump", jump, 0, kMaxRelativeDepth, kBeyondAnyDepthRange)
+      .In("far_side_px", far_side_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("near_side_px", near_side_px, 0, kMaxImageSidePx, kLargerThanAnyImage);
+  return c.ok();
 }
 
 bool SeeThroughOptions::Check(std::string* message) const {
-  if (!(ratio > -1) || rim_px < 0 || near_side_px < 0) {
-    if (message) *message = "see-through rims: ratio must be > -1, rim_px and near_side_px >= 0";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.Above("ratio", ratio, -1, kMaxRelativeDepth, kBeyondAnyDepthRange)
+      .In("rim_px", rim_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("near_side_px", near_side_px, 0, kMaxImageSidePx, kLargerThanAnyImage);
+  return c.ok();
 }
 
 cv::Mat WithoutDepthSteps(const cv::Mat& depth, int far_side_px, int near_side_px, double jump) {

@@ -26,6 +26,8 @@ struct DepthStepOptions {
   double jump = 0.05;    // relative depth step that counts as a discontinuity
   int far_side_px = 2;   // depth within this of a nearer depth (a step's far side) is dropped, px
   int near_side_px = 3;  // depth within this of a farther depth (its near side) is dropped, px
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -36,6 +38,8 @@ struct SeeThroughOptions {
   int rim_px = 5;        // its rim: the hole pixels within this of a measured pixel (0: none), px
   int near_side_px = 8;  // on the rim, SGBM depth within this of a farther SGBM depth on another
                          // hole pixel is dropped, px
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

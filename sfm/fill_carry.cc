@@ -4,17 +4,18 @@
 #include <cmath>
 #include <sstream>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 
 namespace gf {
 
 bool FillCarryOptions::Check(std::string* message) const {
-  if (max_keyframes < 0 || min_agreeing < 1 || !(agreement > 0 && agreement < 1)) {
-    if (message)
-      *message = "fill carry: max_keyframes >= 0, min_agreeing >= 1, agreement in (0, 1)";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.In("max_keyframes", max_keyframes, 0, kMaxFramesInMemory, kMoreFramesThanMemory)
+      .In("min_agreeing", min_agreeing, 1, kMaxFramesInMemory, kMoreFramesThanMemory)
+      .Above("agreement", agreement, 0, 1, kMoreThanOne)
+      .Require(agreement < 1, "agreement must be less than 1 (a relative depth difference)");
+  return c.ok();
 }
 
 KeyframeFillPoints FillPointsInWorld(const StereoFillResult& fill, const SE3& world_from_camera,

@@ -41,6 +41,8 @@ struct FillCarryOptions {
   double agreement = 0.02;  // relative depth difference within which they agree (of the median)
   bool correct_own_fills = true;  // the consensus replaces the keyframe's own fill where it differs
                                   // by more than `agreement`
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <opencv2/imgproc.hpp>
 
+#include "acquisition/bounds.h"
 #include "acquisition/depth.h"
 #include "acquisition/stats.h"
 
@@ -133,27 +134,35 @@ void FillAccepted(const cv::Mat& candidate, const RgbdFrame& key1, const RingVer
 }  // namespace
 
 bool ValidationOptions::Check(std::string* message) const {
-  auto fail = [&](const char* m) {
-    if (message) *message = m;
-    return false;
-  };
-  if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m))
-    return fail("need 0 < min_depth_m < max_depth_m");
-  if (ring_px < 1 || min_ring_samples < 1 || ring_cell_px < 0 || !(max_ring_error > 0) ||
-      !(max_ring_scale >= 0) || !(max_pair_error > 0) || !(free_space_margin > 0))
-    return fail("ring, error and free-space thresholds must be positive");
-  return true;
+  FieldCheck c(message);
+  c.Above("min_depth_m", min_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Above("max_depth_m", max_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Require(max_depth_m > min_depth_m, "max_depth_m must be more than min_depth_m")
+      .In("ring_px", ring_px, 1, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("min_ring_samples", min_ring_samples, 1, kMaxImagePixels, kMoreThanAnImagesPixels)
+      .In("ring_cell_px", ring_cell_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .Above("max_ring_error", max_ring_error, 0, kMaxRelativeDepth, kBeyondAnyDepthRange)
+      // The scale is applied when within 1 +- max_ring_scale: from 1 on it could be 0 or negative.
+      .In("max_ring_scale", max_ring_scale, 0, 1, "would allow a scale of zero or less")
+      .Require(max_ring_scale < 1, "max_ring_scale must be less than 1 (scales stay positive)")
+      .Above("max_pair_error", max_pair_error, 0, kMaxRelativeDepth, kBeyondAnyDepthRange)
+      .Above("free_space_margin", free_space_margin, 0, kMaxRelativeDepth, kBeyondAnyDepthRange);
+  return c.ok();
 }
 
 bool PhotometricOptions::Check(std::string* message) const {
-  if (patch_px < 3 || patch_px > 99 || patch_px % 2 == 0 || !(min_ncc > -1) ||
-      !(min_patch_std >= 0) || !(max_mean_difference > 0) || !(occlusion_margin >= 0) ||
-      !(corroboration_depth_step > 0) || !(corroboration_shift_px >= 0)) {
-    if (message)
-      *message = "photometric check: odd patch in 3..99, min_ncc > -1, positive thresholds";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.In("patch_px", patch_px, 3, 99, "is a larger patch than the check compares")
+      .Require(patch_px % 2 == 1, "patch_px must be odd")
+      .Above("min_ncc", min_ncc, -1, 1, kMoreThanOne)
+      .In("min_patch_std", min_patch_std, 0, kMaxGreyLevel, kBeyondGreyLevels)
+      .Above("max_mean_difference", max_mean_difference, 0, kMaxGreyLevel, kBeyondGreyLevels)
+      .In("occlusion_margin", occlusion_margin, 0, kMaxRelativeDepth, kBeyondAnyDepthRange)
+      .Above("corroboration_depth_step", corroboration_depth_step, 0, kMaxRelativeDepth,
+             kBeyondAnyDepthRange)
+      .In("corroboration_shift_px", corroboration_shift_px, 0, kMaxImageSidePx,
+          kLargerThanAnyImage);
+  return c.ok();
 }
 
 DepthFill SensorOnly(const RgbdFrame& key1) {

@@ -32,7 +32,7 @@ struct ValidationOptions {
                               // size, pixels (0: whole holes only)
   double max_ring_error = 0.03;       // median relative error allowed in the ring (after scaling)
   bool ring_scale_correction = true;  // scale each hole's depth by its ring's sensor/stereo ratio
-  double max_ring_scale = 0.10;       // ... when that ratio is within 1 +- this
+  double max_ring_scale = 0.10;       // ... when that ratio is within 1 +- this (< 1)
   double max_pair_error = 0.08;  // median relative error over the whole image, else nothing fills
   // A filled point that another keyframe's sensor sees through (RemoveSeenThrough: all of the 3x3
   // measured pixels around its projection farther than it by free_space_margin, relative) lies
@@ -41,6 +41,8 @@ struct ValidationOptions {
   // but only with the sensor frames that come after a fill reaches it.
   bool free_space_check = true;
   double free_space_margin = 0.03;
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -60,6 +62,8 @@ struct PhotometricOptions {
   // precision. Fusion confirms a corroborated fill without waiting for another keyframe's fill.
   double corroboration_depth_step = 0.03;
   double corroboration_shift_px = 1.0;
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <opencv2/core.hpp>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 
 namespace gf {
@@ -17,17 +18,18 @@ double Ms(Clock::time_point a, Clock::time_point b) {
 }  // namespace
 
 bool KeyframeFillerOptions::Check(std::string* message) const {
-  auto fail = [&](const char* m) {
-    if (message) *message = m;
-    return false;
-  };
-  if (pairs.max_near_disparity_px > stereo.sgbm.num_disparities)
-    return fail("pairs.max_near_disparity_px exceeds stereo.sgbm.num_disparities");
-  // Pair selection picks a partner by the method that will fill it (its disparity limits differ
-  // for forward pairs); the stereo must classify the pair the same way.
-  if (!(pairs.geometry == stereo.geometry))
-    return fail("pair selection and stereo must share one geometry (the fill's `geometry`)");
-  return pairs.Check(message) && stereo.Check(message) && carry.Check(message);
+  FieldCheck c(message);
+  c.Require(pairs.max_near_disparity_px <= stereo.sgbm.num_disparities,
+            "pairs.max_near_disparity_px exceeds stereo.sgbm.num_disparities")
+      // Pair selection picks a partner by the method that will fill it (its disparity limits
+      // differ for forward pairs); the stereo must classify the pair the same way.
+      .Require(pairs.geometry == stereo.geometry,
+               "geometry: pair selection and stereo must share one geometry (the fill's "
+               "`geometry`)")
+      .Part("pairs", pairs)
+      .Part("stereo", stereo)
+      .Part("carry", carry);
+  return c.ok();
 }
 
 KeyframeFiller::KeyframeFiller(const Camera& camera, const KeyframeFillerOptions& options)

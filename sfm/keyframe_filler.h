@@ -32,6 +32,8 @@ struct KeyframeFillerOptions {
   PairSelectionOptions pairs;
   StereoFillOptions stereo;
   FillCarryOptions carry;
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -9,6 +9,7 @@
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "acquisition/bounds.h"
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
 #include "sfm/stereo_fill.h"
@@ -21,22 +22,31 @@ constexpr double kDegPerRad = 180.0 / M_PI;
 }  // namespace
 
 bool PairSelectionOptions::Check(std::string* message) const {
-  auto fail = [&](const char* m) {
-    if (message) *message = m;
-    return false;
-  };
-  if (min_matches < 1) return fail("min_matches must be positive");
-  if (max_evaluations < 1) return fail("max_evaluations must be positive");
-  if (max_witnesses < 0) return fail("max_witnesses must not be negative");
-  if (!geometry.Check(message)) return false;
-  if (!(max_baseline_m > geometry.min_baseline_m))
-    return fail("need geometry.min_baseline_m < max_baseline_m");
-  if (!(max_rotation_deg > 0)) return fail("max_rotation_deg must be positive");
-  if (!(min_median_disparity_px >= 0) || !(max_near_disparity_px > min_median_disparity_px) ||
-      !(max_near_disparity_sweep_px > min_median_disparity_px))
-    return fail("need 0 <= min_median_disparity_px < max_near_disparity_px");
-  if (window < 1 || lookahead < 0) return fail("need window >= 1 and lookahead >= 0");
-  return surf.Check(message) && match.Check(message) && refine.Check(message);
+  // Candidates, the window and the keyframes waited for are keyframes held in memory.
+  FieldCheck c(message);
+  c.In("min_matches", min_matches, 1, kMaxImagePixels, kMoreThanAnImagesPixels)
+      .In("max_evaluations", max_evaluations, 1, kMaxFramesInMemory, kMoreFramesThanMemory)
+      .In("max_witnesses", max_witnesses, 0, kMaxFramesInMemory, kMoreFramesThanMemory)
+      .Part("geometry", geometry)
+      .In("max_baseline_m", max_baseline_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Require(max_baseline_m > geometry.min_baseline_m,
+               "max_baseline_m must be more than geometry.min_baseline_m")
+      .Above("max_rotation_deg", max_rotation_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .In("min_median_disparity_px", min_median_disparity_px, 0, kMaxImageSidePx,
+          kLargerThanAnyImage)
+      .In("max_near_disparity_px", max_near_disparity_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("max_near_disparity_sweep_px", max_near_disparity_sweep_px, 0, kMaxImageSidePx,
+          kLargerThanAnyImage)
+      .Require(max_near_disparity_px > min_median_disparity_px &&
+                   max_near_disparity_sweep_px > min_median_disparity_px,
+               "max_near_disparity_px and max_near_disparity_sweep_px must be more than "
+               "min_median_disparity_px")
+      .In("window", window, 1, kMaxFramesInMemory, kMoreFramesThanMemory)
+      .In("lookahead", lookahead, 0, kMaxFramesInMemory, kMoreFramesThanMemory)
+      .Part("surf", surf)
+      .Part("match", match)
+      .Part("refine", refine);
+  return c.ok();
 }
 
 std::string PairChoice::BriefReport() const {

@@ -79,6 +79,8 @@ struct PairSelectionOptions {
   }();
   MatchOptions match;
   PoseRefinementOptions refine;
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -7,6 +7,7 @@
 #include <memory>
 #include <opencv2/imgproc.hpp>
 
+#include "acquisition/bounds.h"
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
 #include "sfm/plane_sweep_kernels.h"
@@ -68,20 +69,27 @@ ActiveColumns::ActiveColumns(const cv::Mat& active, int half) {
 }  // namespace sweep_detail
 
 bool PlaneSweepOptions::Check(std::string* message) const {
-  if (window_px < 3 || window_px % 2 == 0 || max_planes < 3 || max_planes > 250 ||
-      !(max_step_px > 0) || !(min_ncc > -1 && min_ncc < 1) ||
-      !(min_uniqueness >= 0 && min_uniqueness < 1) || !(min_parallax_px >= 0) ||
-      !(min_texture >= 0) || !(min_window_inside > 0 && min_window_inside <= 1) ||
-      smooth_small < 0 || smooth_large < smooth_small || smooth_large > 1000 ||
-      textureless_cost < 0 || textureless_cost > 200 || downscale < 1 || downscale > 4 ||
-      context_px < 0) {
-    if (message)
-      *message =
-          "plane sweep: odd window >= 3, 3..250 planes, thresholds in range, 0 <= smooth_small <= "
-          "smooth_large <= 1000, textureless_cost in [0, 200], downscale 1..4, context_px >= 0";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.In("window_px", window_px, 3, kMaxImageSidePx, kLargerThanAnyImage)
+      .Require(window_px % 2 == 1, "window_px must be odd")
+      .In("max_planes", max_planes, 3, 250,
+          "is more planes than the sweep allows (its time grows with them)")
+      .Above("max_step_px", max_step_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .Above("min_ncc", min_ncc, -1, 1, kMoreThanOne)
+      .Require(min_ncc < 1, "min_ncc must be less than 1 (no window correlates better)")
+      .In("min_uniqueness", min_uniqueness, 0, 1, kMoreThanOne)
+      .Require(min_uniqueness < 1, "min_uniqueness must be less than 1")
+      .In("min_parallax_px", min_parallax_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("min_texture", min_texture, 0, kMaxGreyLevel, kBeyondGreyLevels)
+      .Above("min_window_inside", min_window_inside, 0, 1, kMoreThanOne)
+      // Costs are 1 - NCC in hundredths (0-200): a smoothness penalty beyond 1000 outweighs five
+      // pixels' whole cost range, and a textureless window costs at most what the worst match does.
+      .In("smooth_small", smooth_small, 0, 1000, "outweighs the matching cost")
+      .In("smooth_large", smooth_large, smooth_small, 1000, "outweighs the matching cost")
+      .In("textureless_cost", textureless_cost, 0, 200, "is more than the worst match costs")
+      .In("downscale", downscale, 1, 4, "shrinks the images more than the sweep allows")
+      .In("context_px", context_px, 0, kMaxImageSidePx, kLargerThanAnyImage);
+  return c.ok();
 }
 
 std::string PlaneSweepResult::BriefReport() const {

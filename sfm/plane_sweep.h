@@ -60,6 +60,8 @@ struct PlaneSweepOptions {
   // (foreground fattening, e.g. a label's depth onto the clear glass below it). Projector-shadow
   // pixels do not count as hole pixels here (they show the background beside an edge).
   bool hole_windows = true;
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -6,6 +6,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 
 namespace gf {
@@ -91,21 +92,22 @@ cv::Mat ValidGrid(const Camera& camera, const cv::Mat& r, const cv::Mat& p, cons
 }  // namespace
 
 bool SgbmOptions::Check(std::string* message) const {
-  auto fail = [&](const char* m) {
-    if (message) *message = m;
-    return false;
-  };
-  if (num_disparities < 16 || num_disparities % 16)
-    return fail("num_disparities: positive multiple of 16");
-  if (block_size < 1 || block_size % 2 == 0) return fail("block_size must be odd");
-  if (!(rectify_alpha >= -1 && rectify_alpha <= 1)) return fail("rectify_alpha must be in [-1, 1]");
-  if (!(max_zoom == 0 || max_zoom >= 0.25)) return fail("max_zoom: 0 (none) or at least 0.25");
-  if (!(min_valid_fraction >= 0 && min_valid_fraction <= 1))
-    return fail("min_valid_fraction must be in [0, 1]");
-  if (!(max_lr_difference_px >= 0) || uniqueness_ratio < 0 || speckle_window < 0 ||
-      speckle_range < 0)
-    return fail("SGBM's lr difference, uniqueness and speckle settings must be >= 0");
-  return true;
+  // OpenCV's SGBM aborts the process on a disparity range wider than the image (DESIGN.md).
+  FieldCheck c(message);
+  c.In("num_disparities", num_disparities, 16, kMaxImageSidePx, kLargerThanAnyImage)
+      .Require(num_disparities % 16 == 0, "num_disparities must be a multiple of 16")
+      .In("block_size", block_size, 1, kMaxImageSidePx, kLargerThanAnyImage)
+      .Require(block_size % 2 == 1, "block_size must be odd")
+      .In("rectify_alpha", rectify_alpha, -1, 1, "is beyond cv::stereoRectify's alpha (-1 to 1)")
+      // A crop magnified more than an image's side would be smaller than one camera pixel.
+      .In("max_zoom", max_zoom, 0, kMaxImageSidePx, "magnifies less than a pixel to an image")
+      .Require(max_zoom == 0 || max_zoom >= 0.25, "max_zoom: 0 (none) or at least 0.25")
+      .In("min_valid_fraction", min_valid_fraction, 0, 1, kMoreThanOne)
+      .In("uniqueness_ratio", uniqueness_ratio, 0, 100, "is more than 100 percent")
+      .In("speckle_window", speckle_window, 0, kMaxImagePixels, kMoreThanAnImagesPixels)
+      .In("speckle_range", speckle_range, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("max_lr_difference_px", max_lr_difference_px, 0, kMaxImageSidePx, kLargerThanAnyImage);
+  return c.ok();
 }
 
 bool SgbmParametersFit(int width, int height, int min_disparity, int num_disparities,

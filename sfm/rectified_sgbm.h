@@ -39,7 +39,8 @@ struct SgbmOptions {
   // Most magnification of the rectified images against the camera's own pixels (rectified focal
   // length / fx). A crop magnified more keeps its field of view on a smaller image: magnifying
   // past the camera's pixels adds no detail, only pixels and disparities to search (SGBM's time
-  // grows with the magnification's cube). 0: the crop's own magnification, whatever it is.
+  // grows with the magnification's cube). 0: the crop's own magnification, whatever it is. At
+  // most the largest image side (a crop magnified more would be under a pixel).
   double max_zoom = 1.0;
   // Share of the rectified image that must show the scene in both views (inside the images and
   // the lens's field of view) for SGBM to run; below it the plane sweep fills the pair.
@@ -49,6 +50,8 @@ struct SgbmOptions {
   int speckle_window = 100;           // SGBM speckle filter window, pixels
   int speckle_range = 2;              // SGBM speckle range, disparity units
   double max_lr_difference_px = 1.0;  // left-right consistency, pixels (rounded: disp12MaxDiff)
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "acquisition/bounds.h"
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
 #include "acquisition/stats.h"
@@ -99,17 +100,22 @@ bool FillBySweep(const cv::Mat& wanted, FillContext* c, StereoFillResult* result
 }  // namespace
 
 bool PairGeometryOptions::Check(std::string* message) const {
-  if (!(min_baseline_m > 0) || !(epipole_margin_px >= 0)) {
-    if (message) *message = "min_baseline_m must be positive and epipole_margin_px >= 0";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.Above("min_baseline_m", min_baseline_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .In("epipole_margin_px", epipole_margin_px, 0, kMaxImageSidePx, kLargerThanAnyImage);
+  return c.ok();
 }
 
 bool StereoFillOptions::Check(std::string* message) const {
-  return geometry.Check(message) && sgbm.Check(message) && plane_sweep.Check(message) &&
-         depth_steps.Check(message) && see_through.Check(message) && validation.Check(message) &&
-         photometric.Check(message);
+  FieldCheck c(message);
+  c.Part("geometry", geometry)
+      .Part("sgbm", sgbm)
+      .Part("plane_sweep", plane_sweep)
+      .Part("depth_steps", depth_steps)
+      .Part("see_through", see_through)
+      .Part("validation", validation)
+      .Part("photometric", photometric);
+  return c.ok();
 }
 
 std::string StereoFillResult::BriefReport() const {

@@ -42,6 +42,8 @@ namespace gf {
 struct PairGeometryOptions {
   double min_baseline_m = 0.04;   // shorter baselines give too little parallax, metres
   double epipole_margin_px = 40;  // epipole inside an image or this close to it: forward motion
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
   bool operator==(const PairGeometryOptions& o) const {
     return min_baseline_m == o.min_baseline_m && epipole_margin_px == o.epipole_margin_px;
@@ -65,6 +67,8 @@ struct StereoFillOptions {
   SeeThroughOptions see_through;
   ValidationOptions validation;
   PhotometricOptions photometric;
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -8,6 +8,7 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 
 namespace gf {
@@ -18,28 +19,42 @@ constexpr double kDegToRad = M_PI / 180.0;
 }  // namespace
 
 bool FusionOptions::Check(std::string* message) const {
-  auto fail = [&](const char* m) {
-    if (message) *message = m;
-    return false;
-  };
-  if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m))
-    return fail("fusion: need 0 < min_depth_m < max_depth_m");
-  if (pixel_step < 1 || fill_pixel_step < 1 || !(max_depth_gap_m > 0) ||
-      !(max_normal_angle_deg > 0) || !(max_normal_angle_deg <= 90) || !(max_radius_ratio > 0) ||
-      !(confidence_sigma > 0) || !(normal_test_min_facing >= 0 && normal_test_min_facing <= 1))
-    return fail(
-        "fusion: pixel_step and fill_pixel_step >= 1, positive gap, angle in (0, 90], positive "
-        "ratio, sigma, normal_test_min_facing in [0, 1]");
-  if (!(stable_confidence > 0) || unstable_frames < 1 || !(fill_weight > 0) ||
-      !(fill_stable_confidence > 0) || fill_unstable_frames < 1)
-    return fail("fusion: positive stable confidences, windows and fill weight");
-  if (normal_filter_px < 1 || !(normal_filter_depth_m > 0) || normal_baseline_px < 1)
-    return fail("fusion: the normals' filter needs a positive size and depth scale");
-  if (!(free_space_margin >= 0) || !(free_space_penalty >= 0) || !(max_neighbour_step > 0))
-    return fail("fusion: free-space margin and penalty >= 0, positive neighbour step");
-  if (max_surfels < 1 || merge_copies_every < 1)
-    return fail("fusion: max_surfels and merge_copies_every must be positive");
-  return true;
+  // Confidence grows by a measurement's weight (at most 1) per frame that sees a surfel, so a
+  // threshold beyond a day's capture is never reached. The radial weight's sigma is in half image
+  // diagonals: at 1000 the corner's weight differs from 1 below single precision.
+  constexpr double kMaxConfidence = kMaxCaptureFrames;
+  constexpr double kFlatSigma = 1000;
+  FieldCheck c(message);
+  c.Above("min_depth_m", min_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Above("max_depth_m", max_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Require(max_depth_m > min_depth_m, "max_depth_m must be more than min_depth_m")
+      .In("pixel_step", pixel_step, 1, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("fill_pixel_step", fill_pixel_step, 1, kMaxImageSidePx, kLargerThanAnyImage)
+      .Above("max_depth_gap_m", max_depth_gap_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Above("max_normal_angle_deg", max_normal_angle_deg, 0, 90,
+             "is more than a surface facing the camera can turn")
+      .In("normal_test_min_facing", normal_test_min_facing, 0, 1, kMoreThanOne)
+      .Above("max_radius_ratio", max_radius_ratio, 0, kMaxRelativeDepth, kBeyondAnyDepthRange)
+      .Above("confidence_sigma", confidence_sigma, 0, kFlatSigma, "is a flat weight")
+      .Above("stable_confidence", stable_confidence, 0, kMaxConfidence, kMoreFramesThanACapture)
+      .In("unstable_frames", unstable_frames, 1, kMaxCaptureFrames, kMoreFramesThanACapture)
+      .Above("fill_weight", fill_weight, 0, kMaxRelativeWeight, kOutweighsBeyondRounding)
+      .Above("fill_stable_confidence", fill_stable_confidence, 0, kMaxConfidence,
+             kMoreFramesThanACapture)
+      .In("fill_unstable_frames", fill_unstable_frames, 1, kMaxCaptureFrames,
+          kMoreFramesThanACapture)
+      .In("free_space_margin", free_space_margin, 0, kMaxRelativeDepth, kBeyondAnyDepthRange)
+      .In("free_space_penalty", free_space_penalty, 0, kMaxConfidence, kMoreFramesThanACapture)
+      .Above("max_neighbour_step", max_neighbour_step, 0, kMaxRelativeDepth, kBeyondAnyDepthRange)
+      .In("merge_copies_every", merge_copies_every, 1, kMaxCaptureFrames, kMoreFramesThanACapture)
+      .In("max_surfels", static_cast<double>(max_surfels), 1, kMaxMapSurfels,
+          "takes more than the map's 16 GiB at 48 bytes a surfel")
+      // The filter runs on the depth at half size.
+      .In("normal_filter_px", normal_filter_px, 1, kMaxImageSidePx / 2,
+          "is larger than any half-size image")
+      .Above("normal_filter_depth_m", normal_filter_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .In("normal_baseline_px", normal_baseline_px, 1, kMaxImageSidePx, kLargerThanAnyImage);
+  return c.ok();
 }
 
 std::string FusionStats::BriefReport() const {
@@ -166,7 +181,14 @@ FusionStats SurfelFusion::Fuse(const Measurement& m) {
                  &normals);
   });
   Integrate(m, results, &stats);
-  if (m.time_step) CleanUp(m, &stats);
+  if (m.time_step) {
+    CleanUp(m, &stats);
+  } else if (map_.live() > static_cast<size_t>(options_.max_surfels)) {
+    // A fill is no time step (nothing is stale or seen through after it), but its surfels count
+    // against the budget as the sensor's do: a map of many fills must stay within max_surfels too.
+    KeepWithinBudget(&stats);
+    CompactMap();
+  }
   stats.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return stats;

@@ -24,8 +24,9 @@
 //     max_normal_angle_deg whatever their facing), each centre within the other's disc, are
 //     merged into the more confident of the two, so passes over the same surface do
 //     not stack copies of it;
-//  6. the map holds at most max_surfels: beyond it, the least confirmed surfels go (unstable
-//     first, then the stable ones seen longest ago).
+//  6. the map holds at most max_surfels, fills included (checked after every frame and every
+//     fill): beyond it, the least confirmed surfels go (unstable first, then the stable ones seen
+//     longest ago).
 // Radius: sqrt(2) z / f / |n_z|, at most twice the head-on radius. Fills count fill_weight of a
 // sensor measurement, so one keyframe's fill alone never reaches fill_stable_confidence: a fill
 // becomes part of the model only when another keyframe's fill agrees with it (within
@@ -58,6 +59,11 @@ namespace gf {
 // FuseFill's mask value for a fill pixel that a view independent of its pair corroborates.
 inline constexpr uint8_t kCorroboratedFill = 128;
 
+// The largest map budget (FusionOptions::max_surfels): 16 GiB of surfels, a quarter of a 64 GiB
+// workstation's memory, which leaves room for the frames, the fill and the index maps.
+inline constexpr long kMaxMapBytes = 16L << 30;
+inline constexpr long kMaxMapSurfels = kMaxMapBytes / static_cast<long>(sizeof(Surfel));
+
 struct FusionOptions {
   double min_depth_m = 0.3;  // measurements outside [min_depth_m, max_depth_m] are not fused
   double max_depth_m = 4.0;  // (Kinect noise grows with the square of depth)
@@ -75,8 +81,11 @@ struct FusionOptions {
   // facing the camera. 0: test every surfel's normal.
   double normal_test_min_facing = 0.75;
   double max_radius_ratio = 1.5;         // merge geometry only when the measured radius is smaller
-  double confidence_sigma = 0.6;         // radial weight's sigma, in half image diagonals
-  double stable_confidence = 10.0;       // a sensor surfel is stable from this confidence
+  double confidence_sigma = 0.6;         // radial weight's sigma, in half image diagonals (at
+                                         // most 1000: a flat weight)
+  // A sensor surfel is stable from this confidence. Confidences grow by at most about one per
+  // frame: those thresholds are at most a day's frames (acquisition/bounds.h).
+  double stable_confidence = 10.0;
   int unstable_frames = 20;              // unstable surfels not updated this many frames go
   double fill_weight = 0.5;              // a filled pixel's weight relative to a sensor pixel's
   double fill_stable_confidence = 0.75;  // a fill is confirmed (stable) from this confidence
@@ -98,14 +107,17 @@ struct FusionOptions {
   // about a sixth of a frame's fusion, and a copy that waits is only hidden behind the surfel it
   // copies meanwhile (association never reaches it), so the model is the same a few frames later.
   int merge_copies_every = 4;
-  // The map's budget, in surfels (48 bytes each: 4 M is 192 MB); beyond it the least confirmed go.
+  // The map's budget, in surfels (48 bytes each: 4 M is 192 MB), sensor surfels and fills alike;
+  // beyond it the least confirmed go. At most kMaxMapSurfels (16 GiB).
   long max_surfels = 4'000'000;
   // Normals come from the depth smoothed by a bilateral filter at half size: its diameter in
-  // half-size pixels and its depth sigma in metres; then from the smoothed depth this many
-  // full-size pixels either side.
+  // half-size pixels (at most half the largest image side, acquisition/bounds.h) and its depth
+  // sigma in metres; then from the smoothed depth this many full-size pixels either side.
   int normal_filter_px = 5;
   double normal_filter_depth_m = 0.05;
   int normal_baseline_px = 2;
+  // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
+  // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -235,6 +247,9 @@ class SurfelFusion {
   // Sets partner_[e] to the entry that entry e is a copy of (-1: none), for MergeRedundant.
   void FindCopies();
   void KeepWithinBudget(FusionStats* stats);
+  // Drops the removed surfels from the map's storage (SurfelMap::Compact) and renews the chunks
+  // that moved.
+  void CompactMap();
   // A surfel changed: its chunk is no longer settled.
   void Touch(size_t surfel) { chunks_[surfel / kChunk].settled = false; }
   // ... and its position or radius may have: the chunk's bounds grow to hold it.

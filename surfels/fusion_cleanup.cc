@@ -51,6 +51,10 @@ void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
       if ((entry_flags_[e] & (kMayGoStale | kUpdated)) == kMayGoStale) stale(visible_[e]);
   }
   KeepWithinBudget(stats);
+  CompactMap();
+}
+
+void SurfelFusion::CompactMap() {
   // Compaction moves the surfels after the first removed one: only their chunks are new.
   const size_t before = map_.size(), changed = map_.Compact();
   if (changed < before) {

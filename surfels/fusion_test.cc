@@ -306,6 +306,54 @@ TEST(SurfelFusion, TheMapStaysWithinItsBudget) {
   EXPECT_GT(fusion.StableSurfels().size(), 500u);
 }
 
+// Fills count against the budget too: a keyframe's fill over the budget leaves the map within it.
+TEST(SurfelFusion, FillsStayWithinTheBudget) {
+  const Camera camera = SmallCamera();
+  FusionOptions options;
+  options.max_surfels = 1500;
+  SurfelFusion fusion(camera, options);
+  const SE3 pose = At(0, 0, 0);
+  const RgbdFrame wall = Wall(camera, pose);
+  fusion.FuseFrame(wall, pose, 0);
+  ASSERT_LE(fusion.map().live(), 1500u);
+  // A fill of a nearer wall (no surfel there to merge with): 160 x 120 new fill surfels.
+  const RgbdFrame near_wall = Wall(camera, pose, 1.0f);
+  const cv::Mat mask(wall.depth.size(), CV_8UC1, cv::Scalar(255));
+  const cv::Mat confidence(wall.depth.size(), CV_32FC1, cv::Scalar(1.f));
+  const FusionStats s =
+      fusion.FuseFill(wall, near_wall.depth, mask, confidence, DepthSource::kStereo, pose, 0);
+  EXPECT_GT(s.created, 1500);
+  EXPECT_GT(s.over_budget, 0);
+  EXPECT_LE(fusion.map().live(), 1500u);
+  // A budget of one surfel holds one, whatever came.
+  options.max_surfels = 1;
+  SurfelFusion tiny(camera, options);
+  tiny.FuseFrame(wall, pose, 0);
+  tiny.FuseFill(wall, near_wall.depth, mask, confidence, DepthSource::kStereo, pose, 0);
+  EXPECT_LE(tiny.map().live(), 1u);
+}
+
+// The map's budget is bounded by memory (16 GiB of surfels), and the other settings by theirs.
+TEST(FusionOptions, RefusesValuesBeyondTheirBounds) {
+  FusionOptions o;
+  std::string message;
+  EXPECT_TRUE(o.Check(&message)) << message;
+  o.max_surfels = kMaxMapSurfels;
+  EXPECT_TRUE(o.Check(&message)) << message;
+  o.max_surfels = kMaxMapSurfels + 1;
+  EXPECT_FALSE(o.Check(&message));
+  EXPECT_EQ(message.rfind("max_surfels ", 0), 0u) << message;
+  o = {};
+  o.normal_filter_px = 30000;
+  EXPECT_FALSE(o.Check(&message));
+  EXPECT_EQ(message, "normal_filter_px 30000 is larger than any half-size image (at most 2048)");
+  o = {};
+  o.max_depth_m = 1e12;
+  EXPECT_FALSE(o.Check(&message));
+  EXPECT_EQ(message.rfind("max_depth_m 1e+12 is farther than any sensor measures", 0), 0u)
+      << message;
+}
+
 // One keyframe's fill is not enough for the model; a second one that agrees confirms it.
 TEST(SurfelFusion, AFillNeedsASecondKeyframeToBecomeStable) {
   const Camera camera = SmallCamera();
