@@ -55,20 +55,6 @@ struct LoopRun {
   double ate_m = 0;
 };
 
-// A source whose frames take `delay` to read (0: none).
-class PacedSource : public InMemoryFrameSource {
- public:
-  PacedSource(CameraFile camera, std::vector<RgbdFrame> frames, std::chrono::milliseconds delay)
-      : InMemoryFrameSource(std::move(camera), std::move(frames)), delay_(delay) {}
-  bool Next(RgbdFrame* frame) override {
-    std::this_thread::sleep_for(delay_);
-    return InMemoryFrameSource::Next(frame);
-  }
-
- private:
-  std::chrono::milliseconds delay_;
-};
-
 std::unique_ptr<LoopRun> Reconstruct(const std::vector<RgbdFrame>& frames, bool loop_closure,
                                      double drift_deg_per_m, bool fusion,
                                      std::chrono::milliseconds read_delay = {}) {
@@ -77,7 +63,7 @@ std::unique_ptr<LoopRun> Reconstruct(const std::vector<RgbdFrame>& frames, bool 
   options.fusion = fusion;
   options.loop_closure = loop_closure;
   options.tracker.simulated_drift_deg_per_m = drift_deg_per_m;
-  PacedSource source(Loop().camera, frames, read_delay);
+  testing::PacedSource source(Loop().camera, frames, read_delay);
   auto run = std::make_unique<LoopRun>();
   run->summary = Reconstruction(options).Run(source, &run->sink);
   const TrajectoryErrorSummary e = EvaluateTrajectory(Loop().truth, run->sink.trajectory);

@@ -210,27 +210,13 @@ class SlowKeyframeSink : public InMemoryRunSink {
   std::chrono::milliseconds delay_;
 };
 
-// A source whose frames take `delay` to read: tracking falls behind the fill and fusion.
-class SlowSource : public InMemoryFrameSource {
- public:
-  SlowSource(CameraFile camera, std::vector<RgbdFrame> frames, std::chrono::milliseconds delay)
-      : InMemoryFrameSource(std::move(camera), std::move(frames)), delay_(delay) {}
-  bool Next(RgbdFrame* frame) override {
-    std::this_thread::sleep_for(delay_);
-    return InMemoryFrameSource::Next(frame);
-  }
-
- private:
-  std::chrono::milliseconds delay_;
-};
-
 // A recorded capture gives the same outputs on every run, however fast each stage happens to be:
 // fills and loop corrections join the map at fixed points of the frame sequence. One run with
 // the fill held back (each keyframe's write 300 ms late), one with tracking held back (each
 // frame read 150 ms late), every output compared value for value.
 TEST(Reconstruction, ARecordedCaptureGivesTheSameOutputsHoweverFastEachStageRuns) {
   const Capture& c = GlassTable();
-  SlowSource slow_source(c.camera, c.frames, std::chrono::milliseconds(150));
+  testing::PacedSource slow_source(c.camera, c.frames, std::chrono::milliseconds(150));
   InMemoryRunSink first;
   const ReconstructionSummary a = Reconstruction({}).Run(slow_source, &first);
   InMemoryFrameSource source(c.camera, c.frames);

@@ -212,7 +212,7 @@ if(json_error OR NOT input MATCHES "/caf.+$")
   message(FATAL_ERROR "info on a Latin-1 folder name wrote no valid JSON: ${json_error} ${out}")
 endif()
 execute_process(COMMAND "${GLASSFUSION}" reconstruct "${latin1}" --out "${tmp}/latin1_run"
-                        --no-fill --no-loop-closure --allow-lost
+                        --no-fill --no-fusion --no-loop-closure --allow-lost
                 RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
 if(NOT rc EQUAL 0 OR NOT EXISTS "${tmp}/latin1_run/report.json")
   message(FATAL_ERROR "reconstruct of a Latin-1 folder name: exit ${rc}: ${err}")

@@ -9,25 +9,7 @@ file(REMOVE_RECURSE "${tmp}")
 file(MAKE_DIRECTORY "${tmp}")
 include("${CMAKE_CURRENT_LIST_DIR}/find_python.cmake")
 
-# Runs glassfusion; sets rc, out and last (the last line of stderr: progress lines come first).
-function(run)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE err)
-  string(STRIP "${err}" err)
-  string(REGEX REPLACE ".*\n" "" last_line "${err}")
-  set(rc "${code}" PARENT_SCOPE)
-  set(out "${stdout}" PARENT_SCOPE)
-  set(err "${err}" PARENT_SCOPE)
-  set(last "${last_line}" PARENT_SCOPE)
-endfunction()
-
-function(expect what expected_rc regex)
-  if(NOT rc EQUAL expected_rc)
-    message(FATAL_ERROR "${what}: expected exit code ${expected_rc}, got ${rc}: ${err}")
-  endif()
-  if(NOT last MATCHES "${regex}")
-    message(FATAL_ERROR "${what}: last line '${last}' does not match '${regex}'")
-  endif()
-endfunction()
+include("${CMAKE_CURRENT_LIST_DIR}/run_and_expect.cmake")
 
 # Checks a run folder's outputs: report.json's "complete" and that the trajectory and camera are
 # there and readable.

@@ -8,25 +8,7 @@ set(tmp "${CMAKE_CURRENT_BINARY_DIR}/cli_safe_outputs_tmp")
 file(REMOVE_RECURSE "${tmp}")
 file(MAKE_DIRECTORY "${tmp}")
 
-# Runs glassfusion; sets rc, out, err and last (the last line of stderr).
-function(run)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE err)
-  string(STRIP "${err}" err)
-  string(REGEX REPLACE ".*\n" "" last_line "${err}")
-  set(rc "${code}" PARENT_SCOPE)
-  set(out "${stdout}" PARENT_SCOPE)
-  set(err "${err}" PARENT_SCOPE)
-  set(last "${last_line}" PARENT_SCOPE)
-endfunction()
-
-function(expect what expected_rc regex)
-  if(NOT rc EQUAL expected_rc)
-    message(FATAL_ERROR "${what}: expected exit code ${expected_rc}, got ${rc}: ${err}")
-  endif()
-  if(NOT last MATCHES "${regex}")
-    message(FATAL_ERROR "${what}: last line '${last}' does not match '${regex}'")
-  endif()
-endfunction()
+include("${CMAKE_CURRENT_LIST_DIR}/run_and_expect.cmake")
 
 # Every file under `dir` with its content's hash, as one string: equal before and after means
 # nothing was deleted, added or changed.

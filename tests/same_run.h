@@ -1,16 +1,35 @@
-// Test helper: whether two runs of the same capture wrote the same outputs, value for value (the
-// bytes a run folder would hold), apart from timings. Header-only, tests only.
+// Test helpers for reproducibility: a source that holds tracking back, and whether two runs of the
+// same capture wrote the same outputs, value for value (the bytes a run folder would hold), apart
+// from timings. Header-only, tests only.
 #pragma once
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstring>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
+#include <vector>
 
+#include "acquisition/frame_source.h"
 #include "pipeline/run_sink.h"
 
 namespace gf::testing {
+
+// A source whose frames take `delay` to read: tracking falls behind the other stages.
+class PacedSource : public InMemoryFrameSource {
+ public:
+  PacedSource(CameraFile camera, std::vector<RgbdFrame> frames, std::chrono::milliseconds delay)
+      : InMemoryFrameSource(std::move(camera), std::move(frames)), delay_(delay) {}
+  bool Next(RgbdFrame* frame) override {
+    std::this_thread::sleep_for(delay_);
+    return InMemoryFrameSource::Next(frame);
+  }
+
+ private:
+  std::chrono::milliseconds delay_;
+};
 
 // report.json without what measures time (the keys "seconds", "fps", "ms", "stages", any key
 // ending in "_ms", and the machine's core count).
