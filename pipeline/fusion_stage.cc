@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 
 #include "acquisition/bounds.h"
 #include "acquisition/errors.h"
@@ -39,6 +41,14 @@ bool FusionStageOptions::Check(std::string* message) const {
   c.In("queue_capacity", queue_capacity, 1, kMaxFramesInMemory, kMoreFramesThanMemory)
       .In("count_every", count_every, 1, kMaxCaptureFrames, kMoreFramesThanACapture)
       .In("completion_max_gap_px", completion_max_gap_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("completion_max_angle_deg", completion_max_angle_deg, 0, 90,
+          "is more than a surface facing the camera can turn")
+      .In("completion_min_support", completion_min_support, 0, kMaxCaptureFrames,
+          kMoreFramesThanACapture)
+      .In("completion_occluder_px", completion_occluder_px, 0, kMaxImageSidePx,
+          kLargerThanAnyImage)
+      .Above("completion_support_half", completion_support_half, 0, kMaxCaptureFrames,
+             kMoreFramesThanACapture)
       .Part("fusion", fusion);
   return c.ok();
 }
@@ -231,15 +241,45 @@ void FusionStage::ApplyCorrections(std::map<int, SE3> latest, int version) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
 }
 
-cv::Mat FusionStage::RenderFills(const SE3& world_from_camera) {
+MapCompletion FusionStage::RenderFills(const SE3& world_from_camera) {
   GF_CHECK(!maps_.empty(), "fusion stage: no map to render");
-  cv::Mat source;
-  cv::Mat depth = maps_.front().fusion.RenderDepth(world_from_camera, &source);
-  depth.setTo(0, source == static_cast<uint8_t>(DepthSource::kSensor));
-  if (options_.completion_max_gap_px > 0)
-    CloseSplatGaps(&depth, source == static_cast<uint8_t>(DepthSource::kNone),
-                   options_.completion_max_gap_px, options_.fusion.free_space_margin);
-  return depth;
+  const double margin = options_.fusion.free_space_margin;
+  MapView view = maps_.front().fusion.RenderView(world_from_camera, margin);
+  MapCompletion offer;
+  offer.depth = view.depth;
+  offer.depth.setTo(0, view.source == static_cast<uint8_t>(DepthSource::kSensor));
+  if (options_.completion_max_gap_px > 0) {
+    const cv::Mat drawn = offer.depth > 0;
+    CloseSplatGaps(&offer.depth, view.source == static_cast<uint8_t>(DepthSource::kNone),
+                   options_.completion_max_gap_px, margin);
+    // A closed gap is as well known as the least known disc around it (the discs that enclose
+    // it lie at most max_gap_px + 1 pixels away).
+    const cv::Mat closed = (offer.depth > 0) & ~drawn;
+    const int reach = options_.completion_max_gap_px + 1;
+    const cv::Mat window =
+        cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * reach + 1, 2 * reach + 1));
+    constexpr float kNone = std::numeric_limits<float>::max();
+    for (cv::Mat* m : {&view.facing, &view.support}) {
+      cv::Mat least = m->clone();
+      least.setTo(kNone, ~drawn);
+      cv::erode(least, least, window);
+      least.setTo(0, least == kNone);  // (none within reach: not confirmed)
+      least.copyTo(*m, closed);
+    }
+  }
+  const cv::Mat confirmed =
+      (offer.depth > 0) &
+      (view.facing >= std::cos(options_.completion_max_angle_deg * M_PI / 180.0)) &
+      (view.support >= options_.completion_min_support);
+  offer.depth.setTo(0, ~confirmed);
+  cv::Mat facing = cv::max(view.facing, 0.0);
+  cv::Mat support_share = view.support / (view.support + options_.completion_support_half);
+  // At least one step of the 8-bit image it is written to, so that every completed pixel shows.
+  offer.confidence = cv::max(facing.mul(support_share), 1.0 / 255);
+  offer.confidence.setTo(0, ~confirmed);
+  offer.occluder_px = options_.completion_occluder_px;
+  offer.occluder_margin = margin;
+  return offer;
 }
 
 bool FusionStage::Prediction(int frames, std::chrono::milliseconds timeout, cv::Mat* depth,

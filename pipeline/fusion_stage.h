@@ -75,6 +75,31 @@ struct FusionStageOptions {
   // CloseSplatGaps): the renderer's discs, seen from a keyframe other than the ones that measured
   // them, do not tile the image. Pixels; 0 leaves the gaps.
   int completion_max_gap_px = 4;
+  // A keyframe takes the map's depth only where the map's surface is confirmed from its side
+  // (MapView, surfels/fusion.h). Each rule leaves out a class of pixels that the map fills more
+  // often wrongly than rightly, on the tuning frames and on the check frames alike (punched TUM
+  // head and mid, at 1-3 times the capture's speed: docs/experiments/
+  // 2026-12-06-completion-that-knows.md). The nearest surfel's normal within this angle of the
+  // direction back to the keyframe (degrees, at most 90): at 90, a surface seen from behind was
+  // not measured from this side (those pixels were right 20-42% of the time); 75 also leaves out
+  // surfaces seen nearly edge-on, right 33% of the time on head but 59% on mid: not adopted...
+  double completion_max_angle_deg = 90;
+  // ... the surface carries at least this support (MapView::support: the summed confidence of the
+  // surfels whose discs the pixel's ray meets within fusion.free_space_margin of its depth, the
+  // weight of the measurements that put a surface there; a sensor frame adds at most 1 to a
+  // surfel, a fill pixel fusion.fill_weight times its stereo confidence). 0: any stable fill,
+  // which a second keyframe or an independent view has already confirmed (FusionOptions); a
+  // threshold of 10 left out pixels right about half the time, so the support goes into the
+  // confidence instead...
+  double completion_min_support = 0;
+  // ... and no sensor pixel of the keyframe within this many pixels lies in front of it by more
+  // than fusion.free_space_margin: the map's surface there is behind the object the keyframe saw
+  // at the hole's rim (MapCompletion::occluder_px; 0: not checked; those pixels were right 46%
+  // of the time).
+  int completion_occluder_px = 5;
+  // The completed pixels' confidence (written to fill_confidence.png): the facing cosine times
+  // support / (support + completion_support_half), so half the facing's at this support.
+  double completion_support_half = 10;
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -121,10 +146,11 @@ class FusionStage {
                   SE3* world_from_camera);
   // report.json's "surfels" for variant `index`.
   nlohmann::ordered_json Report(size_t index = 0) const;
-  // After Finish(): the first variant's model seen from world_from_camera (at the final
-  // corrections) where its nearest stable surfel is a fill, gaps between the fill discs closed
-  // (completion_max_gap_px); CV_32F metres, 0 elsewhere.
-  cv::Mat RenderFills(const SE3& world_from_camera);
+  // After Finish(): what the first variant's model offers a keyframe at world_from_camera (at the
+  // final corrections): its depth where the nearest stable surfel is a fill, gaps between the
+  // fill discs closed (completion_max_gap_px), kept where the surface is confirmed from that side
+  // (completion_max_angle_deg, completion_min_support), with its confidence.
+  MapCompletion RenderFills(const SE3& world_from_camera);
 
  private:
   struct Item {

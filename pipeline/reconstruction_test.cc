@@ -171,6 +171,7 @@ TEST(Reconstruction, TheMapCompletesEachKeyframeFromItsFills) {
   const nlohmann::ordered_json& record = sink.report["fill"]["model_completion"];
   ASSERT_TRUE(record.is_object()) << sink.report["fill"].dump(2);
   long completed = 0, good = 0, outside_holes = 0, in_shadows = 0;
+  std::vector<std::pair<float, bool>> confidence_good;  // per completed pixel
   for (const auto& [name, k] : sink.keyframes) {
     if (k.model_fill.empty()) continue;
     const int i = k.frame.index;
@@ -183,19 +184,37 @@ TEST(Reconstruction, TheMapCompletesEachKeyframeFromItsFills) {
             k.frame.hole_mask.at<uint8_t>(y, x) == static_cast<uint8_t>(HoleCode::kShadow);
         const double z = k.fill.filled_depth.at<float>(y, x),
                      t = c.visible_depth[i].at<float>(y, x);
-        good += t > 0 && std::abs(z - t) <= 0.03 * t;
+        const bool right = t > 0 && std::abs(z - t) <= 0.03 * t;
+        good += right;
+        const float confidence = k.fill.confidence.at<float>(y, x);
+        ASSERT_TRUE(confidence > 0.f && confidence <= 1.f) << confidence << " at " << x << ", " << y;
+        confidence_good.emplace_back(confidence, right);
       }
   }
-  std::printf("model completion: %ld pixels of %d keyframes, %.1f%% within 3%%\n", completed,
-              record["keyframes"].get<int>(), completed ? 100.0 * good / completed : 0.0);
+  // The confidence written for the completed pixels predicts their error: the upper half is
+  // right more often than the lower (measured 97.5% against 86.0%).
+  std::sort(confidence_good.begin(), confidence_good.end());
+  const size_t half = confidence_good.size() / 2;
+  double lower = 0, upper = 0;
+  for (size_t i = 0; i < confidence_good.size(); ++i)
+    (i < half ? lower : upper) += confidence_good[i].second;
+  lower /= std::max<size_t>(half, 1);
+  upper /= std::max<size_t>(confidence_good.size() - half, 1);
+  std::printf("model completion: %ld pixels of %d keyframes, %.1f%% within 3%% (upper half of "
+              "the confidence %.1f%%, lower %.1f%%)\n",
+              completed, record["keyframes"].get<int>(), completed ? 100.0 * good / completed : 0.0,
+              100 * upper, 100 * lower);
+  EXPECT_GT(upper, lower + 0.05);
   EXPECT_EQ(completed, record["pixels"].get<long>());
   EXPECT_GT(completed, 200);
   EXPECT_EQ(outside_holes, 0);
   EXPECT_EQ(in_shadows, 0);  // the near object's fill spread past its edge would land there
-  // Measured 91.1% (AMD EPYC, 2 cores), the same on every run since fills join the map at fixed
-  // points of the sequence; before, it varied between 89.8% and 91.2% from run to run on an Intel
-  // machine. The bound leaves room for the few tenths that another CPU's SIMD paths (OpenCV's
-  // dispatch) may move it, not for a completion that is worse.
+  // Measured 91.1% with every fill the map offered (AMD EPYC, 2 cores), the same on every run
+  // since fills join the map at fixed points of the sequence (before, it varied between 89.8%
+  // and 91.2% from run to run on an Intel machine); 91.7% now that surfaces seen from
+  // behind or hidden by the keyframe's own nearer depth are left out. The bound leaves room for
+  // the few tenths that another CPU's SIMD paths (OpenCV's dispatch) may move it, not for a
+  // completion that is worse.
   EXPECT_GT(good, 0.88 * completed);
   EXPECT_FALSE(record["stopped"].get<bool>());
 }
@@ -322,10 +341,10 @@ class RecordingSink : public InMemoryRunSink {
     Note("map");
     InMemoryRunSink::WriteMap(surfels);
   }
-  int CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) override {
+  int CompleteKeyframe(const std::string& name, const MapCompletion& offer) override {
     Note("completion");
     ++completed_calls;
-    return InMemoryRunSink::CompleteKeyframe(name, model_depth);
+    return InMemoryRunSink::CompleteKeyframe(name, offer);
   }
   std::vector<std::string> order;
   std::vector<bool> reports_complete;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -57,18 +58,32 @@ std::string StampOfIndexedName(const std::string& name) {
   return name.substr(underscore + 1, dot - underscore - 1);
 }
 
-int CompleteFromModel(const cv::Mat& hole_mask, const cv::Mat& model_depth, cv::Mat* filled_depth,
-                      cv::Mat* completed) {
+int CompleteFromModel(const cv::Mat& hole_mask, const MapCompletion& offer, cv::Mat* filled_depth,
+                      cv::Mat* confidence, cv::Mat* completed) {
+  const cv::Mat& model_depth = offer.depth;
   GF_CHECK(hole_mask.type() == CV_8UC1 && model_depth.type() == CV_32FC1 &&
                filled_depth->type() == CV_32FC1 && hole_mask.size() == model_depth.size() &&
-               filled_depth->size() == model_depth.size(),
-           "completion: CV_8U holes, CV_32F depths of one size");
+               filled_depth->size() == model_depth.size() &&
+               offer.confidence.type() == CV_32FC1 && offer.confidence.size() == model_depth.size(),
+           "completion: CV_8U holes, CV_32F depths and confidence of one size");
   // Not in projector shadows: there the far surface is what colour sees, and a fill in front of
   // it in the model is the near surface's fill spread past its edge (the keyframe's own fill
   // tests shadows against both sides; ValidateAndFill).
   *completed = (hole_mask != 0) & (hole_mask != static_cast<uint8_t>(HoleCode::kShadow)) &
                (*filled_depth <= 0) & (model_depth > 0);
+  if (offer.occluder_px > 0) {
+    // The nearest sensor depth within occluder_px of each pixel (a minimum filter; no sensor
+    // depth: infinitely far).
+    cv::Mat sensor = filled_depth->clone();
+    sensor.setTo(std::numeric_limits<float>::max(), (hole_mask != 0) | (sensor <= 0));
+    cv::Mat nearest;
+    cv::erode(sensor, nearest,
+              cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * offer.occluder_px + 1,
+                                                                 2 * offer.occluder_px + 1)));
+    *completed &= nearest >= model_depth * (1.0 - offer.occluder_margin);
+  }
   model_depth.copyTo(*filled_depth, *completed);
+  if (confidence) offer.confidence.copyTo(*confidence, *completed);
   return cv::countNonZero(*completed);
 }
 
@@ -145,7 +160,7 @@ cv::Mat FolderRunSink::Undistort(const cv::Mat& image, int interpolation) const 
   return out;
 }
 
-int FolderRunSink::CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) {
+int FolderRunSink::CompleteKeyframe(const std::string& name, const MapCompletion& offer) {
   std::string pinhole_file;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -156,18 +171,24 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const cv::Mat& mode
   const std::string base = (fs::path(out_dir_) / "keyframes" / name).string();
   const cv::Mat mm = cv::imread(base + ".depth_filled.png", cv::IMREAD_UNCHANGED);
   const cv::Mat holes = cv::imread(base + ".hole_mask.png", cv::IMREAD_UNCHANGED);
+  cv::Mat confidence_8u = cv::imread(base + ".fill_confidence.png", cv::IMREAD_UNCHANGED);
   if (mm.type() != CV_16UC1 || holes.type() != CV_8UC1 || mm.size() != holes.size() ||
-      mm.size() != model_depth.size())
+      mm.size() != offer.depth.size())
     throw InputError(base + ".depth_filled.png",
                      "cannot be read back with its hole mask at the camera's size");
-  cv::Mat filled, completed;
+  if (confidence_8u.type() != CV_8UC1 || confidence_8u.size() != mm.size())
+    confidence_8u = cv::Mat::zeros(mm.size(), CV_8UC1);  // a keyframe whose fill failed has none
+  cv::Mat filled, completed, confidence;
   mm.convertTo(filled, CV_32F, 0.001);
-  const int pixels = CompleteFromModel(holes, model_depth, &filled, &completed);
+  confidence_8u.convertTo(confidence, CV_32F, 1.0 / 255);
+  const int pixels = CompleteFromModel(holes, offer, &filled, &confidence, &completed);
   if (pixels == 0) return 0;
   // depth_filled.png (what users and the figures read) last: when an earlier write fails it stays
   // as the keyframe's fill left it, and the warning says the keyframe was not completed.
   const cv::Mat completed_mm = ToMillimetres(filled);
   WriteImage(File("keyframes/" + name + ".model_fill.png"), completed);
+  confidence.convertTo(confidence_8u, CV_8U, 255.0);
+  WriteImage(File("keyframes/" + name + ".fill_confidence.png"), confidence_8u);
   WriteImage(File("undistorted/depth/" + pinhole_file), Undistort(completed_mm, cv::INTER_NEAREST));
   // The overlay shows the completed pixels orange (they were magenta: holes left empty).
   const cv::Mat color = cv::imread(base + ".color.png", cv::IMREAD_COLOR);
@@ -232,10 +253,17 @@ void InMemoryRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& fr
   keyframes[name] = {frame, fill, cv::Mat()};
 }
 
-int InMemoryRunSink::CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) {
+int InMemoryRunSink::CompleteKeyframe(const std::string& name, const MapCompletion& offer) {
   std::lock_guard<std::mutex> lock(mutex_);
   Keyframe& k = keyframes.at(name);
-  return CompleteFromModel(k.frame.hole_mask, model_depth, &k.fill.filled_depth, &k.model_fill);
+  k.fill.filled_depth = k.fill.filled_depth.clone();  // (it may share pixels with the fill's)
+  cv::Mat* confidence = nullptr;
+  if (k.fill.confidence.type() == CV_32FC1 && k.fill.confidence.size() == offer.depth.size()) {
+    k.fill.confidence = k.fill.confidence.clone();
+    confidence = &k.fill.confidence;
+  }
+  return CompleteFromModel(k.frame.hole_mask, offer, &k.fill.filled_depth, confidence,
+                           &k.model_fill);
 }
 
 void InMemoryRunSink::WriteTrajectory(const Trajectory& t) {

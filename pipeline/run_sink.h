@@ -41,6 +41,18 @@
 
 namespace gf {
 
+// What the final map offers a keyframe's holes (FusionStage::RenderFills).
+struct MapCompletion {
+  cv::Mat depth;       // CV_32F metres: the map's fill surface where it is confirmed from the
+                       // keyframe's side; 0 = none
+  cv::Mat confidence;  // CV_32F, 0-1 where depth > 0: how far the map's depth there is trusted
+  // A valid sensor pixel of the keyframe within occluder_px pixels that lies nearer than the
+  // offered depth by more than occluder_margin (relative) hides it: the map's surface there is
+  // behind the object the keyframe saw at the hole's rim, not what the hole holds.
+  int occluder_px = 0;
+  double occluder_margin = 0.03;
+};
+
 class RunSink {
  public:
   virtual ~RunSink() = default;
@@ -54,11 +66,12 @@ class RunSink {
   virtual void WriteReport(const nlohmann::ordered_json& report) = 0;
   // map.ply (surfels/ply.h): the stable surfels of the run's surfel map.
   virtual void WriteMap(const std::vector<Surfel>& surfels) = 0;
-  // Completes keyframe `name` (written before) from the model: its hole pixels that its filled
-  // depth leaves empty take model_depth (CV_32F metres, 0 = none) where it has one
-  // (CompleteFromModel). Returns the pixels completed. Throws InputError when the keyframe cannot
-  // be read back or rewritten, std::out_of_range when no keyframe of that name was written.
-  virtual int CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) = 0;
+  // Completes keyframe `name` (written before) from the map: its hole pixels that its filled
+  // depth leaves empty take the offered depth where there is one and nothing of the keyframe hides
+  // it (CompleteFromModel), with the offer's confidence. Returns the pixels completed. Throws
+  // InputError when the keyframe cannot be read back or rewritten, std::out_of_range when no
+  // keyframe of that name was written.
+  virtual int CompleteKeyframe(const std::string& name, const MapCompletion& offer) = 0;
   // Where the outputs go, for messages ("memory" for the in-memory sink).
   virtual std::string Where() const = 0;
 };
@@ -87,7 +100,7 @@ class FolderRunSink : public RunSink {
   void WriteMap(const std::vector<Surfel>& surfels) override;
   // Rewrites <name>.depth_filled.png and the pinhole depth, and writes <name>.model_fill.png (255
   // where the model completed the keyframe).
-  int CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) override;
+  int CompleteKeyframe(const std::string& name, const MapCompletion& offer) override;
   std::string Where() const override { return out_dir_; }
 
  private:
@@ -112,7 +125,7 @@ class InMemoryRunSink : public RunSink {
  public:
   struct Keyframe {
     RgbdFrame frame;
-    CarriedFillResult fill;  // filled_depth completed by CompleteKeyframe
+    CarriedFillResult fill;  // filled_depth and confidence completed by CompleteKeyframe
     cv::Mat model_fill;      // CV_8U: 255 where CompleteKeyframe completed it (empty before)
   };
   void WriteKeyframe(const std::string& name, const RgbdFrame& frame,
@@ -121,7 +134,7 @@ class InMemoryRunSink : public RunSink {
   void WriteCamera(const CameraFile& camera) override;
   void WriteReport(const nlohmann::ordered_json& report) override;
   void WriteMap(const std::vector<Surfel>& surfels) override;
-  int CompleteKeyframe(const std::string& name, const cv::Mat& model_depth) override;
+  int CompleteKeyframe(const std::string& name, const MapCompletion& offer) override;
   std::string Where() const override { return "memory"; }
 
   // Read after the run.
@@ -142,11 +155,13 @@ class InMemoryRunSink : public RunSink {
 std::string IndexedFileName(int number, const std::string& timestamp);
 std::string StampOfIndexedName(const std::string& name);
 
-// Sets *filled_depth (CV_32F metres) to model_depth (same size, 0 = none) on the pixels of
-// hole_mask (CV_8U, non-zero: the sensor's holes) that it leaves empty; *completed (CV_8U) gets 255
-// there. Returns their count.
-int CompleteFromModel(const cv::Mat& hole_mask, const cv::Mat& model_depth, cv::Mat* filled_depth,
-                      cv::Mat* completed);
+// Sets *filled_depth (CV_32F metres) to offer.depth (same size, 0 = none) on the pixels of
+// hole_mask (CV_8U, non-zero: the sensor's holes; not projector shadows) that it leaves empty and
+// where no sensor pixel (hole_mask 0) within offer.occluder_px lies in front of the offered depth
+// (MapCompletion); *completed (CV_8U) gets 255 there and *confidence (CV_32F, may be null) the
+// offer's confidence. Returns their count.
+int CompleteFromModel(const cv::Mat& hole_mask, const MapCompletion& offer, cv::Mat* filled_depth,
+                      cv::Mat* confidence, cv::Mat* completed);
 
 // The overlay written as <ts>.fill_overlay.png (see above).
 cv::Mat FillOverlay(const cv::Mat& color, const CarriedFillResult& fill);

@@ -1,6 +1,6 @@
 // FolderRunSink's run folder: --force (replace) removes only what an earlier run wrote, never a
 // folder that holds no run (a capture has a camera.json too), and a second sink into a folder a
-// live sink is writing is refused at once.
+// live sink is writing is refused at once. CompleteFromModel: what the map may complete.
 #include "pipeline/run_sink.h"
 
 #include <gtest/gtest.h>
@@ -9,6 +9,7 @@
 #include <fstream>
 #include <string>
 
+#include "acquisition/depth.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "tests/testing.h"
@@ -102,6 +103,48 @@ TEST(FolderRunSink, ASecondRunIntoALiveFolderIsRefused) {
   }
   EXPECT_TRUE(fs::exists(run + "/report.json"));
   EXPECT_TRUE(fs::exists(run + "/map.ply"));
+}
+
+}  // namespace
+}  // namespace gf
+
+namespace gf {
+namespace {
+
+// The map's offer completes a keyframe's holes only where nothing of the keyframe hides it: a
+// sensor pixel near the hole that lies in front of the offered depth (the hole's rim belongs to
+// a nearer object) keeps the map's farther surface out; the completed pixels take the offer's
+// confidence; measured pixels and projector shadows never change.
+TEST(CompleteFromModel, TheMapFillsOnlyHolesThatNothingNearerHides) {
+  const cv::Size size(40, 20);
+  cv::Mat holes = cv::Mat::zeros(size, CV_8UC1);
+  cv::Mat depth(size, CV_32FC1, cv::Scalar(2.0));  // the sensor: a wall at 2 m...
+  depth(cv::Rect(0, 0, 10, 20)) = 1.0;             // ... and a near object on the left
+  // Two holes: one beside the near object (x 10-13), one in the middle of the wall (x 24-27);
+  // a shadow at x 34.
+  for (int x : {10, 11, 12, 13, 24, 25, 26, 27}) holes.col(x) = 1;
+  holes.col(34) = static_cast<uint8_t>(HoleCode::kShadow);
+  depth.setTo(0.f, holes != 0);
+  MapCompletion offer;
+  offer.depth = cv::Mat(size, CV_32FC1, cv::Scalar(2.0));  // the map: the wall everywhere
+  offer.confidence = cv::Mat(size, CV_32FC1, cv::Scalar(0.6));
+  offer.occluder_px = 3;
+  offer.occluder_margin = 0.03;
+  cv::Mat filled = depth.clone(), confidence = cv::Mat::zeros(size, CV_32FC1), completed;
+  const int n = CompleteFromModel(holes, offer, &filled, &confidence, &completed);
+  // Beside the near object, the three columns within 3 px of it stay empty; the fourth and the
+  // whole middle hole are completed.
+  EXPECT_EQ(n, 5 * size.height);
+  for (int x : {10, 11, 12}) EXPECT_EQ(cv::countNonZero(completed.col(x)), 0) << x;
+  for (int x : {13, 24, 25, 26, 27}) EXPECT_EQ(cv::countNonZero(completed.col(x)), size.height);
+  EXPECT_EQ(cv::countNonZero(completed.col(34)), 0);  // a shadow
+  EXPECT_EQ(cv::norm(filled, depth, cv::NORM_INF, holes == 0), 0.0);  // measured: unchanged
+  EXPECT_FLOAT_EQ(confidence.at<float>(5, 25), 0.6f);
+  EXPECT_FLOAT_EQ(confidence.at<float>(5, 11), 0.f);
+  // Without the check, the hole beside the near object is completed too.
+  offer.occluder_px = 0;
+  filled = depth.clone();
+  EXPECT_EQ(CompleteFromModel(holes, offer, &filled, nullptr, &completed), 8 * size.height);
 }
 
 }  // namespace

@@ -82,7 +82,9 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopStageOptions, database, detector, graph, 
                                    odometry_noise, gap_sigma_m, gap_sigma_deg,
                                    relocalise_candidates, free_keyframes)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionStageOptions, fusion, queue_capacity, count_every,
-                                   fuse_carried, complete_keyframes, completion_max_gap_px)
+                                   fuse_carried, complete_keyframes, completion_max_gap_px,
+                                   completion_max_angle_deg, completion_min_support,
+                                   completion_occluder_px, completion_support_half)
 
 namespace {
 

@@ -134,6 +134,19 @@ struct FusionStats {
   std::string BriefReport() const;
 };
 
+// The map seen from a viewpoint (SurfelFusion::RenderView), per pixel.
+struct MapView {
+  cv::Mat depth;   // CV_32F metres: the nearest stable surfel's disc (RenderDepth); 0 = none
+  cv::Mat source;  // CV_8U: its DepthSource (kNone where none)
+  // CV_32F: the cosine between its stored normal and the direction back to the camera: 1 seen
+  // face-on, 0 edge-on, below 0 from behind (a fill's normal is noisy, yet predicts its error).
+  cv::Mat facing;
+  // CV_32F: the summed confidence of every stable surfel whose disc the pixel's ray meets no
+  // farther than the nearest depth times (1 + support_margin): the measurement weight behind the
+  // surface there (a sensor frame adds up to 1, a fill pixel fill_weight times its confidence).
+  cv::Mat support;
+};
+
 // Surfel counts and area by source (index: DepthSource).
 struct SurfelCounts {
   std::array<long, 5> stable{};            // surfels that reached their source's stable confidence
@@ -171,6 +184,10 @@ class SurfelFusion {
   // to. front_source,
   // when given, gets each pixel's nearest surfel's source (CV_8U DepthSource, kNone where none).
   cv::Mat RenderDepth(const SE3& world_from_camera, cv::Mat* front_source = nullptr);
+  // The same rendering with what says how well the map knows each pixel's surface (MapView):
+  // the nearest surfel's facing, and the support of the surface within support_margin (a
+  // relative depth) of it.
+  MapView RenderView(const SE3& world_from_camera, double support_margin);
   // Moves every surfel with the keyframe it belongs to (Surfel::keyframe): by
   // world_correction_of_keyframe[k] (a transform of the world applied on the left), the last entry
   // for keyframes beyond the list; surfels of no keyframe (-1) stay. For a pose-graph correction.
@@ -259,6 +276,10 @@ class SurfelFusion {
     if (!chunk.dirty) chunk.Include(map_[surfel]);  // (dirty: recomputed before its next use)
   }
   bool ChunkVisible(size_t chunk, const SE3& camera_from_world);
+  // Calls visit(surfel, its normal in the camera, the pixel's ray (x/z, y/z, 1), x, y, depth) for
+  // every pixel a stable surfel's disc covers (RenderDepth's discs).
+  template <typename Visit>
+  void ForEachSplatPixel(const SE3& world_from_camera, Visit visit);
 
   // Surfels are culled by chunks of kChunk consecutive ones (created together, so close together)
   // with a bounding sphere: around the box that holds their positions, plus the largest radius.

@@ -180,10 +180,9 @@ void SurfelFusion::NearestPerPixel() {
   });
 }
 
-cv::Mat SurfelFusion::RenderDepth(const SE3& world_from_camera, cv::Mat* front_source) {
+template <typename Visit>
+void SurfelFusion::ForEachSplatPixel(const SE3& world_from_camera, Visit visit) {
   const SE3 camera_from_world = world_from_camera.Inverse();
-  cv::Mat depth = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1);
-  cv::Mat source = cv::Mat::zeros(depth.size(), CV_8UC1);
   chunks_.resize((map_.size() + kChunk - 1) / kChunk);
   const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
@@ -200,8 +199,9 @@ cv::Mat SurfelFusion::RenderDepth(const SE3& world_from_camera, cv::Mat* front_s
       // per cent over a few pixels tilt it far more than the sensor's (on punched TUM frames a
       // fill surfel's normal is a median 33 degrees off the nearest sensor surfel's within 1 cm,
       // a sensor surfel's 2 degrees), and a disc tilted that far covers a sliver of its pixels.
+      const Eigen::Vector3f normal = r * s.normal;
       const Eigen::Vector3f n = s.source == static_cast<uint8_t>(DepthSource::kSensor)
-                                    ? Eigen::Vector3f(r * s.normal)
+                                    ? normal
                                     : Eigen::Vector3f(-q.normalized());
       if (q.z() < options_.min_depth_m) continue;
       const float n_dot_q = n.dot(q);
@@ -223,16 +223,51 @@ cv::Mat SurfelFusion::RenderDepth(const SE3& world_from_camera, cv::Mat* front_s
           if (std::abs(along) < 1e-3f) continue;
           const float z = n_dot_q / along;
           if (!(z > 0) || (dir * z - q).squaredNorm() > s.radius * s.radius) continue;
-          float& d = depth.at<float>(y, x);
-          if (d == 0.f || z < d) {
-            d = z;
-            source.at<uint8_t>(y, x) = s.source;
-          }
+          visit(s, normal, dir, x, y, z);
         }
     }
   }
+}
+
+cv::Mat SurfelFusion::RenderDepth(const SE3& world_from_camera, cv::Mat* front_source) {
+  cv::Mat depth = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1);
+  cv::Mat source = cv::Mat::zeros(depth.size(), CV_8UC1);
+  ForEachSplatPixel(world_from_camera, [&](const Surfel& s, const Eigen::Vector3f&,
+                                           const Eigen::Vector3f&, int x, int y, float z) {
+    float& d = depth.at<float>(y, x);
+    if (d == 0.f || z < d) {
+      d = z;
+      source.at<uint8_t>(y, x) = s.source;
+    }
+  });
   if (front_source) *front_source = source;
   return depth;
+}
+
+MapView SurfelFusion::RenderView(const SE3& world_from_camera, double support_margin) {
+  MapView view;
+  view.depth = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1);
+  view.source = cv::Mat::zeros(view.depth.size(), CV_8UC1);
+  view.facing = cv::Mat::zeros(view.depth.size(), CV_32FC1);
+  view.support = cv::Mat::zeros(view.depth.size(), CV_32FC1);
+  // The nearest surfel per pixel, with how squarely its stored normal faces the camera.
+  ForEachSplatPixel(world_from_camera, [&](const Surfel& s, const Eigen::Vector3f& normal,
+                                           const Eigen::Vector3f& dir, int x, int y, float z) {
+    float& d = view.depth.at<float>(y, x);
+    if (d == 0.f || z < d) {
+      d = z;
+      view.source.at<uint8_t>(y, x) = s.source;
+      view.facing.at<float>(y, x) = -normal.dot(dir) / dir.norm();
+    }
+  });
+  // Then the confidence of every surfel on that surface (within support_margin of its depth).
+  const float margin = static_cast<float>(support_margin);
+  ForEachSplatPixel(world_from_camera, [&](const Surfel& s, const Eigen::Vector3f&,
+                                           const Eigen::Vector3f&, int x, int y, float z) {
+    const float d = view.depth.at<float>(y, x);
+    if (z <= d * (1.f + margin)) view.support.at<float>(y, x) += s.confidence;
+  });
+  return view;
 }
 
 }  // namespace gf

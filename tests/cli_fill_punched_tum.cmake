@@ -55,9 +55,10 @@ sys.exit(1 if bad else 0)"
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "depth_filled changed measured pixels: ${err}")
 endif()
-# fill_confidence.png: zero on sensor pixels, set on the keyframe's own filled ones, and it
-# predicts the error: the removed pixels filled with confidence >= 0.75 are within 3% more often
-# than the rest. The pixels the map completed (model_fill.png) are holes, and filled.
+# fill_confidence.png: zero on sensor pixels, set on the keyframe's own filled ones and on those
+# the map completed, and it predicts the error: the removed pixels filled with confidence >= 0.75
+# are within 3% more often than the rest. The pixels the map completed (model_fill.png) are
+# holes, and filled.
 execute_process(COMMAND "${PYTHON}" -c "
 import cv2, glob, os, sys
 n = [0, 0, 0, 0]; on_sensor = 0; unset = 0; completed = 0
@@ -71,7 +72,7 @@ for p in glob.glob('${work}/run/keyframes/*.fill_confidence.png'):
     model = cv2.imread(mp, -1) > 0 if os.path.exists(mp) else src < 0
     on_sensor += int(((src > 0) & (c > 0)).sum()) + int((model & ((src > 0) | (out == 0))).sum())
     filled = (src == 0) & (out > 0) & ~model  # the keyframe's own fill (the map's has none)
-    unset += int((filled & (c == 0)).sum())
+    unset += int((filled & (c == 0)).sum()) + int((model & (c == 0)).sum())
     hit = filled & (t > 0)
     good = hit & (abs(out - t) <= 0.03 * t)
     high = c >= 0.75
