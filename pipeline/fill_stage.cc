@@ -34,7 +34,7 @@ FillStage::FillStage(const Camera& camera, const FillStageOptions& options, RunS
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
   GF_CHECK(sink != nullptr, "the fill stage needs a sink");
-  worker_.Start([this] { Run(); });
+  worker_.Start("gf-fill", [this] { Run(); });
 }
 
 FillStage::~FillStage() {

@@ -86,6 +86,9 @@ class FillStage {
   nlohmann::ordered_json Report() const;
   std::vector<KeyframeFill> keyframes() const;
 
+  // CPU seconds the stage's own thread used, once it has ended.
+  double cpu_seconds() const { return worker_.cpu_seconds(); }
+
  private:
   struct Offered {
     RgbdFrame frame;

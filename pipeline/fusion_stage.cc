@@ -82,7 +82,7 @@ FusionStage::FusionStage(const Camera& camera, const FusionStageOptions& options
     GF_CHECK(v.sink != nullptr, "every fusion variant needs a sink");
     maps_.push_back({std::move(v), SurfelFusion(camera, options.fusion), {}, {}, {}, 0, 0, {}, 0, 0});
   }
-  worker_.Start([this] { Run(); });
+  worker_.Start("gf-fusion", [this] { Run(); });
 }
 
 FusionStage::~FusionStage() {

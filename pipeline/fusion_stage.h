@@ -152,6 +152,9 @@ class FusionStage {
   // (completion_max_angle_deg, completion_min_support), with its confidence.
   MapCompletion RenderFills(const SE3& world_from_camera);
 
+  // CPU seconds the stage's own thread used, once it has ended.
+  double cpu_seconds() const { return worker_.cpu_seconds(); }
+
  private:
   struct Item {
     bool fill = false;

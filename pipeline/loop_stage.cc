@@ -63,7 +63,7 @@ LoopClosureStage::LoopClosureStage(const Camera& camera, const LoopStageOptions&
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
   GF_CHECK(corrections != nullptr, "the loop-closure stage publishes into PoseCorrections");
-  worker_.Start([this] { Run(); });
+  worker_.Start("gf-loop", [this] { Run(); });
 }
 
 LoopClosureStage::~LoopClosureStage() {

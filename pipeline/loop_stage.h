@@ -107,6 +107,9 @@ class LoopClosureStage : public Relocaliser {
   // report.json's "loops".
   nlohmann::ordered_json Report() const;
 
+  // CPU seconds the stage's own thread used, once it has ended.
+  double cpu_seconds() const { return worker_.cpu_seconds(); }
+
  private:
   void Run();
   void Process(const LoopKeyframeItem& item);

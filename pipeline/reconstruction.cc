@@ -375,6 +375,7 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   GF_CHECK(!without_fill || (options_.fill && options_.fusion),
            "a run without fill beside this one needs the fill and the fusion");
   const auto start = Clock::now();
+  const double cpu_start = ProcessCpuSeconds();
   ReconstructionProgress progress;
   progress.total = source.FrameCount();
   if (progress.total) {
@@ -430,6 +431,14 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
     error = std::make_exception_ptr(InputError(source.Input(), "no frames in the selected range"));
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   ReconstructionSummary summary = Summarise(source, *s, error, stop_reason, seconds);
+  summary.cpu_seconds = ProcessCpuSeconds() - cpu_start;
+  summary.report["stages"]["cpu_seconds"] =
+      CpuReport({{"read", s->reader->cpu_seconds()},
+                 {"track", s->tracker->cpu_seconds()},
+                 {"fill", s->fill ? s->fill->cpu_seconds() : 0.0},
+                 {"fusion", s->fusion ? s->fusion->cpu_seconds() : 0.0},
+                 {"loop_closure", s->loop ? s->loop->cpu_seconds() : 0.0}},
+                summary.cpu_seconds, seconds);
   if (!summary.complete && summary.stopped_during.empty())
     summary.stopped_during = error ? error_phase : stop_phase;
   if (!summary.complete) summary.report["stopped_during"] = summary.stopped_during;

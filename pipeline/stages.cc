@@ -24,7 +24,7 @@ constexpr size_t kDepthScaleFrames = 10;
 ReadStage::ReadStage(FrameSource* source, int first_frame, int end_frame,
                      BoundedQueue<FrameItem>* queue)
     : source_(source), first_frame_(first_frame), end_frame_(end_frame), queue_(queue) {
-  thread_.Start([this] { Run(); });
+  thread_.Start("gf-read", [this] { Run(); });
 }
 
 ReadStage::~ReadStage() {
@@ -71,7 +71,7 @@ TrackStage::TrackStage(const FrameSource& source, const TrackerOptions& options,
       fusion_(fusion),
       loop_(loop),
       frame_to_model_(frame_to_model && fusion != nullptr) {
-  thread_.Start([this] { Run(); });
+  thread_.Start("gf-track", [this] { Run(); });
 }
 
 TrackStage::~TrackStage() {

@@ -44,6 +44,9 @@ class ReadStage {
   void Stop();
   void Join() { thread_.Join(); }
 
+  // CPU seconds the stage's own thread used, once it has ended.
+  double cpu_seconds() const { return thread_.cpu_seconds(); }
+
  private:
   void Run();
   FrameSource* source_;
@@ -86,6 +89,9 @@ class TrackStage {
   int frames() const { return frames_; }
   // Once ended.
   const TrackingRecord& record() const { return record_; }
+
+  // CPU seconds the stage's own thread used, once it has ended.
+  double cpu_seconds() const { return thread_.cpu_seconds(); }
 
  private:
   void Run();

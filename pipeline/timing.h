@@ -1,9 +1,13 @@
 // How long a stage's steps took, as report.json and bench write it: {"median_ms", "max_ms",
-// "count"} (null times when there were none).
+// "count"} (null times when there were none), and the CPU time a run used, by stage.
 #pragma once
+
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <nlohmann/json.hpp>
+#include <thread>
+#include <utility>
 #include <vector>
 
 namespace gf {
@@ -12,6 +16,32 @@ inline nlohmann::ordered_json TimingJson(std::vector<double> ms) {
   if (ms.empty()) return {{"median_ms", nullptr}, {"max_ms", nullptr}, {"count", 0}};
   std::sort(ms.begin(), ms.end());
   return {{"median_ms", ms[ms.size() / 2]}, {"max_ms", ms.back()}, {"count", ms.size()}};
+}
+
+// CPU seconds (user and system) the whole process has used so far, every thread.
+inline double ProcessCpuSeconds() {
+  rusage use{};
+  getrusage(RUSAGE_SELF, &use);
+  auto secs = [](const timeval& t) { return t.tv_sec + 1e-6 * t.tv_usec; };
+  return secs(use.ru_utime) + secs(use.ru_stime);
+}
+
+// report.json's stages.cpu_seconds: each stage thread's own CPU time, `other` the rest of the
+// process (OpenCV's worker pool, which runs the stages' parallel loops, and the calling thread),
+// `process` all of it, and `cores_used` = process / wall seconds, beside the machine's cores.
+inline nlohmann::ordered_json CpuReport(const std::vector<std::pair<const char*, double>>& stages, double process,
+               double wall) {
+  nlohmann::ordered_json out;
+  double own = 0;
+  for (const auto& [name, cpu] : stages) {
+    out[name] = cpu;
+    own += cpu;
+  }
+  out["other"] = std::max(0.0, process - own);
+  out["process"] = process;
+  out["cores_used"] = wall > 0 ? process / wall : 0.0;
+  out["cores"] = std::thread::hardware_concurrency();
+  return out;
 }
 
 }  // namespace gf

@@ -171,17 +171,25 @@ class FrameToKeyframeTracker : public Tracker {
   using FeaturesPtr = std::shared_ptr<const FrameFeatures>;
   // Aligns the frame to the keyframe from keyframe_from_predicted (features re-seed it when the
   // prediction is off); fills result->ransac, icp, overlap. True when ICP succeeded without an
-  // implausible jump from the prediction.
+  // implausible jump from the prediction. feature_term: the feature matches also enter ICP's
+  // cost; off for depth moved to its stamp, whose colour (read out by its own rolling shutter)
+  // the move does not correct.
   bool AlignToKeyframe(const DepthPyramid& reference, const DepthPyramid& current,
                        const FrameFeatures& features, SE3 keyframe_from_predicted,
-                       TrackingResult* result) const;
-  // The frame, aligned as the sensor gave it (result->icp against raw_keyframe_), moved to its
-  // stamp's instant with the motion since the last frame and aligned again against keyframe_
-  // (depth_readout_s). Replaces *current, result->icp and tracked_depth when that succeeds.
-  void AlignAtStamp(const RgbdFrame& input, DepthPyramid* current, TrackingResult* result);
-  // The frame becomes the keyframe at world_from_camera (`raw`: its depth as the sensor gave it).
-  void MakeKeyframe(DepthPyramid current, FeaturesPtr features, const SE3& world_from_camera,
-                    DepthPyramid raw = {});
+                       TrackingResult* result, bool feature_term = true) const;
+  // Rolling shutter (depth_readout_s): the frame's depth (`frame`: the input undistorted) moved
+  // to its stamp's instant by a camera moving `step` (previous_from_current) in `dt` seconds;
+  // sets result->depth_at_stamp and tracked_depth. A tracked frame is moved with the last step's
+  // velocity before its one alignment.
+  void MoveToStamp(const RgbdFrame& input, const SE3& step, double dt, RgbdFrame* frame,
+                   TrackingResult* result) const;
+  // Where that velocity is not known (the frame after the first, after a loss): the frame,
+  // aligned as the sensor gave it, moved with the step that alignment measured and aligned again
+  // from there. Replaces *frame, *current, result->icp and the depths when that succeeds.
+  void RealignAtStamp(const RgbdFrame& input, RgbdFrame* frame, DepthPyramid* current,
+                      TrackingResult* result) const;
+  // The frame becomes the keyframe at world_from_camera.
+  void MakeKeyframe(DepthPyramid current, FeaturesPtr features, const SE3& world_from_camera);
   TrackingResult TrackWhileLost(const RgbdFrame& frame, DepthPyramid current,
                                 FeaturesPtr features, TrackingResult result);
   void RefineAgainstModel(const DepthPyramid& model, const DepthPyramid& current,
@@ -205,13 +213,10 @@ class FrameToKeyframeTracker : public Tracker {
   FeaturesPtr keyframe_features_;
   SE3 world_from_keyframe_;
   SE3 world_from_previous_;
-  SE3 velocity_;  // previous_from_current of the last step
-  // Rolling shutter (depth_readout_s): the keyframe's depth as the sensor gave it, the last
-  // frame's alignment to it, and that frame's stamp; motion_known_ when the last frame was
-  // aligned to the current keyframe (else the next frame is not moved).
-  DepthPyramid raw_keyframe_;
-  SE3 raw_keyframe_from_previous_;
+  SE3 velocity_;            // previous_from_current of the last tracked step
+  double velocity_dt_ = 0;  // ... and its seconds
   double previous_time_ = 0, frame_time_ = 0;  // the last frame's stamp, this frame's
+  // velocity_ was measured by the last two frames' alignments (not after a loss or at the start).
   bool motion_known_ = false;
   int keyframes_ = 0;
   DepthPyramid model_;  // the model's depth at world_from_model_ (empty: none for the next frame)
