@@ -23,6 +23,7 @@
 #include "apps/bench_fusion.h"
 #include "apps/progress.h"
 #include "pipeline/settings.h"
+#include "pipeline/timing.h"
 #include "registration/tracker.h"
 #include "sfm/keyframe_filler.h"
 #include "sfm/stereo_fill.h"
@@ -191,30 +192,70 @@ MethodResult TrackFramesToModel(const std::vector<RgbdFrame>& frames, const Came
   return model;
 }
 
-// The tracking pipeline with loop closure, in-process (its threads: reader, tracker, loop
-// closure; no fill, no fusion), on the frames in memory: the trajectory it writes, ms per frame
-// of the whole run, and report.json's "loops" (the loop stage's cost per keyframe).
+// The pipeline in-process (its stage threads) on the frames in memory, as reconstruct runs it
+// with `pipeline` (the whole of it, or tracking with loop closure alone): the trajectory it
+// writes, ms per frame of the whole run, and its report.json. *peak_added_mib: the most resident
+// memory the run held above what the process held before it (sampled every 50 ms).
+nlohmann::ordered_json BenchPipeline(const std::vector<RgbdFrame>& frames,
+                                     const CameraFile& camera, ReconstructionOptions pipeline,
+                                     const std::string& name, MethodResult* result,
+                                     double* peak_added_mib) {
+  pipeline.first_frame = 0;
+  pipeline.end_frame = -1;
+  InMemoryFrameSource source(camera, frames);
+  InMemoryRunSink sink;
+  TerminalProgress progress("bench: " + name, static_cast<int>(frames.size()));
+  const double before_mib = ResidentMiB();
+  double peak_mib = before_mib;
+  ReconstructionCallbacks callbacks;
+  callbacks.progress = [&](const ReconstructionProgress& p) {
+    peak_mib = std::max(peak_mib, ResidentMiB());
+    progress.Update(p.frames);
+  };
+  const ReconstructionSummary s = Reconstruction(pipeline).Run(source, &sink, callbacks);
+  if (peak_added_mib) *peak_added_mib = std::max(peak_mib, ResidentMiB()) - before_mib;
+  result->name = name;
+  result->trajectory = sink.trajectory;
+  result->ms.assign(frames.size(), 1000.0 * s.seconds / frames.size());
+  result->failures = s.lost;
+  return s.report;
+}
+
+// The tracking pipeline with loop closure (threads: reader, tracker, loop closure; no fill, no
+// fusion): report.json's "loops" (the loop stage's cost per keyframe).
 nlohmann::ordered_json BenchLoopClosure(const std::vector<RgbdFrame>& frames,
                                         const CameraFile& camera, const BenchOptions& options,
                                         MethodResult* result) {
   ReconstructionOptions pipeline = options.pipeline;
   pipeline.fill = pipeline.fusion = false;
   pipeline.loop_closure = true;
-  pipeline.first_frame = 0;
-  pipeline.end_frame = -1;
-  InMemoryFrameSource source(camera, frames);
-  InMemoryRunSink sink;
-  TerminalProgress progress("bench: glassfusion + loop closure", static_cast<int>(frames.size()));
-  ReconstructionCallbacks callbacks;
-  callbacks.progress = [&](const ReconstructionProgress& p) { progress.Update(p.frames); };
-  const ReconstructionSummary s = Reconstruction(pipeline).Run(source, &sink, callbacks);
-  result->name = "glassfusion + loop closure (pipeline)";
-  result->trajectory = sink.trajectory;
-  result->ms.assign(frames.size(), 1000.0 * s.seconds / frames.size());
-  result->failures = s.lost;
-  nlohmann::ordered_json loops = s.report["loops"];
+  const nlohmann::ordered_json report = BenchPipeline(
+      frames, camera, pipeline, "glassfusion + loop closure (pipeline)", result, nullptr);
+  nlohmann::ordered_json loops = report["loops"];
   loops.erase("loops");  // the list of loops: in a run's report.json, not here
   return loops;
+}
+
+// The whole reconstruction as `reconstruct` runs it by default (fill, fusion, loop closure, the
+// map's completion of the keyframes; outputs kept in memory): frames per second end to end, the
+// CPU seconds of each stage and the cores used, and the memory the run added.
+nlohmann::ordered_json BenchEndToEnd(const std::vector<RgbdFrame>& frames,
+                                     const CameraFile& camera, const BenchOptions& options,
+                                     MethodResult* result) {
+  double peak_added_mib = 0;
+  const nlohmann::ordered_json report =
+      BenchPipeline(frames, camera, options.pipeline, "glassfusion end to end (reconstruct)",
+                    result, &peak_added_mib);
+  nlohmann::ordered_json out;
+  out["fps"] = report["fps"];
+  out["seconds"] = report["seconds"];
+  out["keyframes"] = report["keyframes"];
+  out["loops_accepted"] = report["loops"].value("accepted", 0);
+  out["cpu_seconds"] = report["stages"]["cpu_seconds"];
+  out["peak_added_mib"] = peak_added_mib;
+  out["stages"] = report["stages"];
+  out["stages"].erase("cpu_seconds");
+  return out;
 }
 
 // OpenCV's RGB-D odometry, frame to frame, on the same frames.
@@ -305,6 +346,12 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
 
   std::vector<MethodResult> results;
   results.push_back(TrackFrames(frames, camera, resolved));
+  nlohmann::ordered_json end_to_end;
+  if (options.end_to_end) {
+    MethodResult m;
+    end_to_end = BenchEndToEnd(frames, source->camera_file(), resolved, &m);
+    results.push_back(std::move(m));
+  }
   nlohmann::ordered_json loop_closure;
   if (options.loop_closure) {
     MethodResult m;
@@ -333,6 +380,7 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
   if (!stereo_fill.is_null()) out["stereo_fill"] = stereo_fill;
   if (!fusion.is_null()) out["fusion"] = fusion;
   if (!loop_closure.is_null()) out["loop_closure"] = loop_closure;
+  if (!end_to_end.is_null()) out["end_to_end"] = end_to_end;
   out["settings"] = SettingsToJson(resolved.pipeline);
   return out;
 }

@@ -31,6 +31,10 @@ struct BenchOptions {
   // Also the whole tracking pipeline with loop closure (in-process, its stage threads, no fill
   // or fusion): ATE beside the others, and the loop stage's cost per keyframe.
   bool loop_closure = true;
+  // Also the whole reconstruction as `reconstruct` runs it (fill, fusion, loop closure, the map's
+  // completion; outputs in memory): end-to-end frames per second, CPU seconds per stage, the
+  // cores used and the peak memory the run added.
+  bool end_to_end = true;
   // > 0: also time stereo hole filling on one core, with every fill_every-th frame a keyframe,
   // paired and filled as reconstruct does (KeyframePairScheduler, then FillHolesByStereo) with our
   // tracked poses; next to OpenCV's StereoSGBM alone on the same rectified sideways pairs.

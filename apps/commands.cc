@@ -214,6 +214,18 @@ void AddCompareCommand(CLI::App& app) {
   });
 }
 
+// bench's end-to-end row, spelt out: CPU seconds per stage, cores used, memory added.
+void PrintEndToEnd(const nlohmann::ordered_json& e) {
+  const auto& cpu = e["cpu_seconds"];
+  std::printf("end to end: %.1f frames/s, %d keyframes; CPU seconds:", e["fps"].get<double>(),
+              e["keyframes"].get<int>());
+  for (const auto& [stage, seconds] : cpu.items())
+    if (stage != "cores_used" && stage != "cores")
+      std::printf(" %s %.1f", stage.c_str(), seconds.get<double>());
+  std::printf("; %.2f of %d cores busy; %.0f MiB added at peak\n", cpu["cores_used"].get<double>(),
+              cpu["cores"].get<int>(), e["peak_added_mib"].get<double>());
+}
+
 void AddBenchCommand(CLI::App& app) {
   auto options = std::make_shared<BenchOptions>();
   auto args = std::make_shared<InputArgs>();
@@ -237,6 +249,9 @@ void AddBenchCommand(CLI::App& app) {
   auto no_loops = std::make_shared<bool>(false);
   cmd->add_flag("--no-loop-closure", *no_loops,
                 "leave out the row of our tracking with loop closure and the loop stage's cost");
+  auto no_end_to_end = std::make_shared<bool>(false);
+  cmd->add_flag("--no-end-to-end", *no_end_to_end,
+                "leave out the whole reconstruction (fill, fusion, loop closure) end to end");
   cmd->add_flag("--fusion", options->fusion,
                 "also time the surfel fusion per frame on one core and on two, and with a map "
                 "of about a million surfels");
@@ -244,12 +259,13 @@ void AddBenchCommand(CLI::App& app) {
   cmd->add_option("--config", *config,
                   "JSON file of tracker and fill settings, as for reconstruct");
   AddPrintConfig(cmd, config.get(), &options->pipeline);
-  cmd->callback([options, args, range, frames, no_peers, no_loops, config] {
+  cmd->callback([options, args, range, frames, no_peers, no_loops, no_end_to_end, config] {
     if (!config->empty()) ApplyConfigFile(*config, &options->pipeline);
     options->input = args->input;
     options->source = args->ToOptions();
     options->peers = !*no_peers;
     options->loop_closure = !*no_loops;
+    options->end_to_end = !*no_end_to_end;
     if (frames->count() > 0) ParseFrameRange(*range, &options->first_frame, &options->end_frame);
     const auto j = RunBench(*options);
     std::printf("%-36s %8s %8s %10s %8s\n", "method", "ms", "fps", "ATE (cm)", "failed");
@@ -277,6 +293,7 @@ void AddBenchCommand(CLI::App& app) {
               : std::to_string(f["opencv_sgbm_median_ms"].get<double>()).substr(0, 6).c_str(),
           f["opencv_sgbm_pairs"].get<int>());
     }
+    if (j.contains("end_to_end")) PrintEndToEnd(j["end_to_end"]);
     std::printf("%d frames, %u cores\n", j["frames"].get<int>(), j["cores"].get<unsigned>());
     std::cout << JsonText(j) << std::endl;
   });

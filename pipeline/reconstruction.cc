@@ -439,6 +439,7 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
                  {"fusion", s->fusion ? s->fusion->cpu_seconds() : 0.0},
                  {"loop_closure", s->loop ? s->loop->cpu_seconds() : 0.0}},
                 summary.cpu_seconds, seconds);
+  summary.report["stages"]["peak_resident_mib"] = PeakResidentMiB();
   if (!summary.complete && summary.stopped_during.empty())
     summary.stopped_during = error ? error_phase : stop_phase;
   if (!summary.complete) summary.report["stopped_during"] = summary.stopped_during;

@@ -1,10 +1,14 @@
 // How long a stage's steps took, as report.json and bench write it: {"median_ms", "max_ms",
-// "count"} (null times when there were none), and the CPU time a run used, by stage.
+// "count"} (null times when there were none), the CPU time a run used, by stage, and the
+// process's resident memory (Linux: /proc/self/statm and getrusage).
 #pragma once
 
 #include <sys/resource.h>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
 #include <utility>
@@ -42,6 +46,22 @@ inline nlohmann::ordered_json CpuReport(const std::vector<std::pair<const char*,
   out["cores_used"] = wall > 0 ? process / wall : 0.0;
   out["cores"] = std::thread::hardware_concurrency();
   return out;
+}
+
+// Resident memory of the process now, MiB (0 where /proc is not there).
+inline double ResidentMiB() {
+  std::ifstream statm("/proc/self/statm");
+  long pages_total = 0, pages_resident = 0;
+  if (!(statm >> pages_total >> pages_resident)) return 0;
+  return static_cast<double>(pages_resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) /
+         (1024.0 * 1024.0);
+}
+
+// The most resident memory the process has held since it started, MiB.
+inline double PeakResidentMiB() {
+  rusage use{};
+  getrusage(RUSAGE_SELF, &use);
+  return static_cast<double>(use.ru_maxrss) / 1024.0;  // ru_maxrss: KiB on Linux
 }
 
 }  // namespace gf
