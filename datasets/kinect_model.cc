@@ -114,6 +114,14 @@ bool KinectModelOptions::Check(std::string* message) const {
   return true;
 }
 
+KinectModelOptions KinectModelOptions::ClearGlassAsHoles() {
+  KinectModelOptions o;
+  o.glass_surface_probability = o.ir_return_probability;
+  o.glass_hole_probability = 1.0 - o.ir_return_probability;
+  o.glass_surface_exponent = o.glass_hole_exponent = 0.0;
+  return o;
+}
+
 namespace {
 
 // One pixel's truth, colour and reading.

@@ -73,6 +73,10 @@ struct KinectModelOptions {
   double glass_through_offset_m = 0.012;    // mean extra depth of readings through glass, metres
   double glass_through_sigma_m = 0.006;     // standard deviation of that extra depth, metres
   bool Check(std::string* message = nullptr) const;
+  // A sensor that treats clear glass like the other IR-failing materials: a hole but for
+  // ir_return_probability of glass-surface returns, at any angle (no reading through it).
+  // For tests of what the fill does with large clear-glass holes.
+  static KinectModelOptions ClearGlassAsHoles();
 };
 
 struct SynthOptions {

@@ -57,6 +57,21 @@ TEST(KinectModel, IrFailingMaterialsAreHolesAndDiffuseSurfacesAreMeasured) {
     ASSERT_GT(pixels, 300) << MaterialName(m) << " barely visible";
     EXPECT_GT(static_cast<double>(holes) / pixels, 0.90) << MaterialName(m);
   }
+  // Unless the sensor is told to treat it as the others.
+  {
+    SynthOptions options;
+    options.frames = 30;
+    const Scene scene = Scene::Make("glass-table", 7);
+    const SynthFrame g = RenderFrame(scene, SynthCamera(), MakeTrajectory(scene, options)[5],
+                                     KinectModelOptions::ClearGlassAsHoles(), 7, 5);
+    const ClearGlassStats glass = CountClearGlass(g);
+    ASSERT_GT(glass.pixels, 300u);
+    EXPECT_GT(glass.Share(glass.holes), 0.90);
+    EXPECT_EQ(glass.through, 0u);
+    // Everything else as with the default sensor.
+    const cv::Mat other = g.label != static_cast<uint8_t>(Material::kClearGlass);
+    EXPECT_EQ(cv::norm(g.raw_disparity, f.raw_disparity, cv::NORM_INF, other), 0.0);
+  }
   const auto [holes, pixels] = per_material[0];
   // Diffuse surfaces in range: no-return holes only at grazing angles, under 2%. Projector
   // shadows are a separate class (geometry, not material) and counted apart.
