@@ -64,7 +64,8 @@ struct Hit {
 class Scene {
  public:
   // Names: "glass-table", "shelf", "window" (a wall with a clear glass panel in a frame, things
-  // behind it), "bottles" (clear bottles and glasses on a table). Throws std::invalid_argument for an unknown name.
+  // behind it), "bottles" (clear bottles and glasses on a table). Throws std::invalid_argument
+  // for an unknown name.
   static Scene Make(const std::string& name, uint32_t seed);
   static std::vector<std::string> Names();
 

@@ -58,8 +58,8 @@ struct KinectModelOptions {
   //   P(glass surface) = glass_surface_probability * cos(theta)^glass_surface_exponent
   //   P(hole)          = glass_hole_probability * cos(theta)^glass_hole_exponent
   //   P(through)       = the rest: the light passes the glass and the sensor reads what is behind.
-  // Both specular returns and holes (glare of the projected pattern) are most common where the
-  // glass faces the camera; oblique glass is mostly seen through. A glass-surface return is
+  // Both glass-surface returns and holes are most common where the glass faces the camera;
+  // oblique glass is mostly seen through. A glass-surface return is
   // measured like any surface (noise, shadow). A reading through the glass gives the depth of the
   // first surface behind it that is not clear glass (what colour sees, SynthFrame::visible_depth),
   // moved by refraction: plus glass_through_offset_m plus a Gaussian of glass_through_sigma_m,
