@@ -89,7 +89,8 @@ void AddSynthCommand(CLI::App& app) {
       "Example: glassfusion synth --scene shelf --frames 30 --seed 6 --out shelf6\nWrites: "
       "OUT/rgb, depth, raw (Kinect v1 11-bit PGM), rgb.txt, depth.txt, camera.json, "
       "groundtruth.txt, gt/ (true depth, materials), scene.ply.");
-  cmd->add_option("--scene", options->scene, "glass-table or shelf")->capture_default_str();
+  cmd->add_option("--scene", options->scene, "glass-table, shelf, window or bottles")
+      ->capture_default_str();
   auto frames = std::make_shared<std::string>(std::to_string(options->frames));
   cmd->add_option("--frames", *frames, "frames to render: N (or 0:N)")->capture_default_str();
   cmd->add_option("--seed", options->seed, "textures, trajectory and noise")->capture_default_str();

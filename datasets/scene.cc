@@ -9,6 +9,7 @@
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "datasets/scene_parts.h"
 
 namespace gf::synth {
 namespace {
@@ -33,48 +34,6 @@ float Lattice(int32_t x, int32_t y, int32_t z, uint32_t seed) {
 }
 
 float Smooth(float t) { return t * t * (3.f - 2.f * t); }
-
-Surface MakeSurface(Material m, Eigen::Vector3f bgr, float contrast, float cell, uint32_t seed) {
-  Surface s;
-  s.material = m;
-  s.base_bgr = bgr;
-  s.texture_contrast = contrast;
-  s.texture_cell_m = cell;
-  s.texture_seed = seed;
-  return s;
-}
-
-Primitive Box(const std::string& name, Eigen::Vector3d lo, Eigen::Vector3d hi, Surface s) {
-  Primitive p;
-  p.kind = Primitive::Kind::kBox;
-  p.name = name;
-  p.min_corner = lo;
-  p.max_corner = hi;
-  p.surface = s;
-  return p;
-}
-
-Primitive Cylinder(const std::string& name, Eigen::Vector3d base, double radius, double height,
-                   Surface s) {
-  Primitive p;
-  p.kind = Primitive::Kind::kCylinder;
-  p.name = name;
-  p.center = base;
-  p.radius = radius;
-  p.height = height;
-  p.surface = s;
-  return p;
-}
-
-Primitive Sphere(const std::string& name, Eigen::Vector3d center, double radius, Surface s) {
-  Primitive p;
-  p.kind = Primitive::Kind::kSphere;
-  p.name = name;
-  p.center = center;
-  p.radius = radius;
-  p.surface = s;
-  return p;
-}
 
 // Slab test; returns entry and exit distances and the entry/exit axes.
 bool SlabInterval(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& lo,
@@ -178,6 +137,52 @@ bool IntersectPrimitive(const Primitive& p, const Eigen::Vector3d& o, const Eige
   return false;
 }
 
+}  // namespace
+
+namespace internal {
+
+Surface MakeSurface(Material m, Eigen::Vector3f bgr, float contrast, float cell, uint32_t seed) {
+  Surface s;
+  s.material = m;
+  s.base_bgr = bgr;
+  s.texture_contrast = contrast;
+  s.texture_cell_m = cell;
+  s.texture_seed = seed;
+  return s;
+}
+
+Primitive Box(const std::string& name, Eigen::Vector3d lo, Eigen::Vector3d hi, Surface s) {
+  Primitive p;
+  p.kind = Primitive::Kind::kBox;
+  p.name = name;
+  p.min_corner = lo;
+  p.max_corner = hi;
+  p.surface = s;
+  return p;
+}
+
+Primitive Cylinder(const std::string& name, Eigen::Vector3d base, double radius, double height,
+                   Surface s) {
+  Primitive p;
+  p.kind = Primitive::Kind::kCylinder;
+  p.name = name;
+  p.center = base;
+  p.radius = radius;
+  p.height = height;
+  p.surface = s;
+  return p;
+}
+
+Primitive Sphere(const std::string& name, Eigen::Vector3d center, double radius, Surface s) {
+  Primitive p;
+  p.kind = Primitive::Kind::kSphere;
+  p.name = name;
+  p.center = center;
+  p.radius = radius;
+  p.surface = s;
+  return p;
+}
+
 void AddRoom(std::vector<Primitive>* prims, uint32_t seed) {
   Primitive room;
   room.kind = Primitive::Kind::kRoom;
@@ -191,7 +196,13 @@ void AddRoom(std::vector<Primitive>* prims, uint32_t seed) {
           MakeSurface(Material::kDiffuse, {0.25f, 0.40f, 0.55f}, 0.5f, 0.01f, seed + 2)));
 }
 
-}  // namespace
+}  // namespace internal
+
+using internal::AddRoom;
+using internal::Box;
+using internal::Cylinder;
+using internal::MakeSurface;
+using internal::Sphere;
 
 const char* MaterialName(Material m) {
   switch (m) {
@@ -226,7 +237,7 @@ float ValueNoise(const Eigen::Vector3d& point, uint32_t seed) {
   return lerp(lerp(c00, c10, ty), lerp(c01, c11, ty), tz);
 }
 
-std::vector<std::string> Scene::Names() { return {"glass-table", "shelf"}; }
+std::vector<std::string> Scene::Names() { return {"glass-table", "shelf", "window", "bottles"}; }
 
 Scene Scene::Make(const std::string& name, uint32_t seed) {
   Scene s;
@@ -302,8 +313,15 @@ Scene Scene::Make(const std::string& name, uint32_t seed) {
     s.orbit_radius_ = 1.7;
     s.eye_height_ = 1.2;
     s.orbit_center_angle_ = -1.5707963267948966;
+  } else if (name == "window" || name == "bottles") {
+    const internal::SceneView view = internal::AddGlassScene(name, seed, wood, &p);
+    s.focus_ = view.focus;
+    s.orbit_radius_ = view.orbit_radius;
+    s.eye_height_ = view.eye_height;
+    s.orbit_center_angle_ = view.orbit_center_angle;
   } else {
-    throw std::invalid_argument("unknown scene \"" + name + "\" (known: glass-table, shelf)");
+    throw std::invalid_argument("unknown scene \"" + name +
+                                "\" (known: glass-table, shelf, window, bottles)");
   }
   s.light_ = s.focus_ + Eigen::Vector3d(0.4, -0.6, 1.9);
   return s;

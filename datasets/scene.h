@@ -10,7 +10,8 @@
 //   kGlossy        shiny textured metal: colour sees texture plus highlights, the Kinect no return;
 //   kDark          matte black absorbing: low-contrast texture, no return;
 //   kTexturedGlass frosted / printed glass: colour sees its texture, no return;
-//   kClearGlass    clear glass: colour sees the background through it (slightly tinted), no return.
+//   kClearGlass    clear glass: colour sees the background through it (slightly tinted); the Kinect
+//                  reads the surface behind it, the glass itself, or nothing (synth.h).
 // Deterministic: the same name and seed give the same scene on every machine.
 #pragma once
 
@@ -62,7 +63,9 @@ struct Hit {
 
 class Scene {
  public:
-  // Names: "glass-table", "shelf". Throws std::invalid_argument for an unknown name.
+  // Names: "glass-table", "shelf", "window" (a wall with a clear glass panel in a frame, things
+  // behind it), "bottles" (clear bottles and glasses on a table). Throws std::invalid_argument
+  // for an unknown name.
   static Scene Make(const std::string& name, uint32_t seed);
   static std::vector<std::string> Names();
 

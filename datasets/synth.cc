@@ -25,13 +25,6 @@ namespace fs = std::filesystem;
 namespace gf::synth {
 namespace {
 
-// Standard normal from two hashed uniforms (Box-Muller).
-double HashGaussian(int x, int y, int frame, uint32_t seed) {
-  const double u1 = std::max(1e-12, static_cast<double>(HashUniform(x, y, frame, seed)));
-  const double u2 = HashUniform(x, y, frame, seed ^ 0xA5A5A5A5u);
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
-}
-
 std::string TimeText(double t) {
   char buffer[64];
   std::snprintf(buffer, sizeof(buffer), "%.6f", t);
@@ -58,21 +51,11 @@ cv::Mat MetresToPng(const cv::Mat& metres) {
 
 }  // namespace
 
-bool KinectModelOptions::Check(std::string* message) const {
-  if (!(min_depth_m > 0 && max_depth_m > min_depth_m && noise_a_m >= 0 && noise_b_per_m >= 0 &&
-        ir_return_probability >= 0 && ir_return_probability <= 1 && grazing_angle_deg > 0 &&
-        grazing_angle_deg <= 90)) {
-    if (message)
-      *message = "Kinect model: need 0 < min < max depth, noise >= 0, probability in [0,1]";
-    return false;
-  }
-  return true;
-}
-
 bool SynthOptions::Check(std::string* message) const {
   const auto names = Scene::Names();
   if (std::find(names.begin(), names.end(), scene) == names.end()) {
-    if (message) *message = "unknown scene \"" + scene + "\" (known: glass-table, shelf)";
+    if (message)
+      *message = "unknown scene \"" + scene + "\" (known: glass-table, shelf, window, bottles)";
     return false;
   }
   if (motion != "orbit" && motion != "vertical" && motion != "diagonal" && motion != "forward") {
@@ -155,109 +138,6 @@ std::vector<SE3> MakeTrajectory(const Scene& scene, const SynthOptions& options)
   return poses;
 }
 
-SynthFrame RenderFrame(const Scene& scene, const Camera& camera, const SE3& world_from_camera,
-                       const KinectModelOptions& kinect, uint32_t seed, int frame_index) {
-  std::string problem;
-  GF_CHECK(kinect.Check(&problem), problem);
-  SynthFrame f;
-  f.world_from_camera = world_from_camera;
-  const int w = camera.width, h = camera.height;
-  f.color.create(h, w, CV_8UC3);
-  f.raw_disparity.create(h, w, CV_16UC1);
-  f.true_depth.create(h, w, CV_32FC1);
-  f.visible_depth.create(h, w, CV_32FC1);
-  f.label.create(h, w, CV_8UC1);
-  f.hole_reason.create(h, w, CV_8UC1);
-  const Eigen::Matrix3d R = world_from_camera.RotationMatrix();
-  const Eigen::Vector3d origin = world_from_camera.translation();
-  const Eigen::Vector3d projector =
-      world_from_camera * Eigen::Vector3d(kinect.projector_baseline_m, 0, 0);
-  const DepthConvention raw_model = DepthConvention::KinectV1Raw11Bit();
-  const double cos_grazing = std::cos(kinect.grazing_angle_deg * M_PI / 180.0);
-  const uint32_t noise_seed = seed * 2654435761u + 17u;
-
-  // Rows are independent and every random number is a hash of (pixel, frame, seed), so the
-  // result does not depend on how OpenCV splits the rows between its worker threads.
-  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& rows) {
-    for (int v = rows.start; v < rows.end; ++v) {
-      for (int u = 0; u < w; ++u) {
-        const Eigen::Vector3d ray_camera((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy,
-                                         1.0);
-        const double ray_norm = ray_camera.norm();
-        const Eigen::Vector3d dir = R * ray_camera / ray_norm;
-        Hit first;
-        uint16_t raw = DepthConvention::kKinectNoReturn;
-        uint8_t reason = static_cast<uint8_t>(HoleCode::kOutOfRange);
-        Eigen::Vector3f bgr = Eigen::Vector3f::Zero();
-        float true_z = 0.f, visible_z = 0.f;
-        uint8_t label = kNoSurface;
-        if (scene.Intersect(origin, dir, 1e-4, 1e3, false, &first)) {
-          const Surface& surface = scene.primitives()[first.primitive].surface;
-          label = static_cast<uint8_t>(surface.material);
-          true_z = static_cast<float>(first.t / ray_norm);
-          // What the colour camera sees.
-          if (surface.material == Material::kClearGlass) {
-            Hit behind;
-            // The nearest surface that is not clear glass, searched from the camera rather than
-            // from just past the glass, so that a surface touching the glass (the table under a
-            // bottle's base) is not stepped over.
-            if (scene.Intersect(origin, dir, 1e-4, 1e3, true, &behind)) {
-              visible_z = static_cast<float>(behind.t / ray_norm);
-              bgr = 0.82f * scene.Shade(behind, dir) + 0.18f * surface.base_bgr;
-            }
-            const Eigen::Vector3d reflected = dir - 2.0 * dir.dot(first.normal) * first.normal;
-            bgr += Eigen::Vector3f::Constant(
-                0.5f * static_cast<float>(
-                           std::pow(std::max(0.0, reflected.dot(Eigen::Vector3d::UnitZ())), 60.0)));
-          } else {
-            visible_z = true_z;
-            bgr = scene.Shade(first, dir);
-          }
-          // What the Kinect measures.
-          const double z = true_z;
-          const double incidence = -dir.dot(first.normal);
-          if (z < kinect.min_depth_m || z > kinect.max_depth_m) {
-            reason = static_cast<uint8_t>(HoleCode::kOutOfRange);
-          } else if (FailsInfrared(surface.material) &&
-                     HashUniform(u, v, frame_index, noise_seed ^ 0x1Eu) >=
-                         kinect.ir_return_probability) {
-            reason = static_cast<uint8_t>(HoleCode::kNoReturn);
-          } else if (incidence < cos_grazing) {
-            reason = static_cast<uint8_t>(HoleCode::kNoReturn);
-          } else {
-            const Eigen::Vector3d to_point = first.point - projector;
-            const double distance = to_point.norm();
-            Hit blocker;
-            if (scene.Intersect(projector, to_point / distance, 1e-4, distance - 1e-3, false,
-                                &blocker)) {
-              reason = static_cast<uint8_t>(HoleCode::kShadow);
-            } else {
-              const double sigma = kinect.noise_a_m + kinect.noise_b_per_m * (z - 0.4) * (z - 0.4);
-              const double noisy = z + sigma * HashGaussian(u, v, frame_index, noise_seed);
-              raw = raw_model.FromMetres(noisy);
-              reason = raw == DepthConvention::kKinectNoReturn
-                           ? static_cast<uint8_t>(HoleCode::kOutOfRange)
-                           : static_cast<uint8_t>(HoleCode::kValid);
-            }
-          }
-        }
-        // Colour sensor: 8-bit with a little noise.
-        cv::Vec3b& c = f.color.at<cv::Vec3b>(v, u);
-        for (int k = 0; k < 3; ++k) {
-          const double noise = 1.5 * HashGaussian(u, v, frame_index * 3 + k, noise_seed ^ 0xC0u);
-          c[k] = cv::saturate_cast<uint8_t>(255.0 * bgr[k] + noise);
-        }
-        f.raw_disparity.at<uint16_t>(v, u) = raw;
-        f.true_depth.at<float>(v, u) = true_z;
-        f.visible_depth.at<float>(v, u) = visible_z;
-        f.label.at<uint8_t>(v, u) = label;
-        f.hole_reason.at<uint8_t>(v, u) = reason;
-      }
-    }
-  });
-  return f;
-}
-
 RgbdFrame ToRgbdFrame(const SynthFrame& f, int index) {
   RgbdFrame frame;
   frame.index = index;
@@ -270,10 +150,18 @@ RgbdFrame ToRgbdFrame(const SynthFrame& f, int index) {
 }
 
 std::string SynthSummary::BriefReport() const {
-  char buffer[160];
+  char buffer[256];
   std::snprintf(buffer, sizeof(buffer), "%d frames, %.1f ms/frame, sensor hole fraction %.3f",
                 frames, 1000.0 * seconds_per_frame, hole_fraction);
-  return buffer;
+  std::string text = buffer;
+  if (clear_glass.pixels) {
+    std::snprintf(buffer, sizeof(buffer),
+                  "; clear glass: %.2f holes, %.2f read behind, %.2f read the glass",
+                  clear_glass.Share(clear_glass.holes), clear_glass.Share(clear_glass.through),
+                  clear_glass.Share(clear_glass.surface));
+    text += buffer;
+  }
+  return text;
 }
 
 SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out_dir,
@@ -328,6 +216,7 @@ SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out
       WriteImage((stage / "gt/holes" / (ts + ".png")).string(), f.hole_reason);
       groundtruth.push_back({t, ts, poses[i]});
       hole_pixels += cv::countNonZero(f.raw_disparity == DepthConvention::kKinectNoReturn);
+      summary.clear_glass += CountClearGlass(f);
       pixels += f.raw_disparity.total();
       if (progress) progress(i + 1, options.frames);
     }
@@ -359,9 +248,21 @@ SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out
                  {"noise_sigma_m", "a + b (z - 0.4)^2"},
                  {"noise_a_m", options.kinect.noise_a_m},
                  {"noise_b_per_m", options.kinect.noise_b_per_m},
-                 {"ir_return_probability", options.kinect.ir_return_probability}};
+                 {"ir_return_probability", options.kinect.ir_return_probability},
+                 {"glass_surface_probability", options.kinect.glass_surface_probability},
+                 {"glass_surface_exponent", options.kinect.glass_surface_exponent},
+                 {"glass_hole_probability", options.kinect.glass_hole_probability},
+                 {"glass_hole_exponent", options.kinect.glass_hole_exponent},
+                 {"glass_through_offset_m", options.kinect.glass_through_offset_m},
+                 {"glass_through_sigma_m", options.kinect.glass_through_sigma_m}};
   j["materials"] = {"diffuse", "glossy", "dark", "textured_glass", "clear_glass"};
   j["sensor_hole_fraction"] = summary.hole_fraction;
+  // What the sensor saw on clear glass, beside the truth (gt/depth is the glass's own surface).
+  const ClearGlassStats& glass = summary.clear_glass;
+  j["clear_glass_sensor"] = {{"pixels", glass.pixels},
+                             {"hole", glass.Share(glass.holes)},
+                             {"reads_behind", glass.Share(glass.through)},
+                             {"reads_surface", glass.Share(glass.surface)}};
   j["seconds_per_frame"] = summary.seconds_per_frame;
   WriteTextFileAtomically((stage / "synth.json").string(), JsonText(j) + "\n");
 

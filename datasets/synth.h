@@ -6,8 +6,12 @@
 //  - depth noise growing with the square of depth, sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 metres
 //    (Nguyen, Izadi, Lovell, 3DIMPVT 2012), then quantisation through the 11-bit raw disparity
 //    value (one raw step is about 1/8 pixel of disparity, DepthConvention::KinectV1Raw11Bit);
-//  - range 0.5-4.5 m; raw value 2047 on IR-failing materials (a small share of their pixels still
-//    return, as real sensors do), out of range, in projector shadow, and at grazing angles.
+//  - range 0.5-4.5 m; raw value 2047 on glossy, dark and textured-glass surfaces (a small share of
+//    their pixels still return, as real sensors do), out of range, in projector shadow, and at
+//    grazing angles;
+//  - clear glass as real sensors see it (measured on RealSense D435 frames of clear objects,
+//    tests/glass_sensor_stats.py): a pixel reads the surface behind the glass, the glass surface
+//    itself (mostly where it faces the camera), or nothing (KinectModelOptions::glass_*).
 //
 // Output folder (written under a temporary name, renamed when complete):
 //   rgb/ depth/ rgb.txt depth.txt camera.json   a TUM RGB-D folder (16-bit depth, 5000 per metre)
@@ -16,10 +20,14 @@
 //                                               little-endian), r-*.ppm, camera.json
 //   gt/depth/<ts>.png                           true depth of the first surface hit (glass too)
 //   gt/visible_depth/<ts>.png                   depth of what colour sees (through clear glass)
-//   gt/label/<ts>.png                           material of the first hit (synth::Material, 255
-//   none) gt/holes/<ts>.png                           why the sensor has no depth (HoleCode)
+//   gt/label/<ts>.png                           material of the first hit (synth::Material,
+//                                               255 none)
+//   gt/holes/<ts>.png                           why the sensor has no depth (HoleCode; 0 where
+//                                               clear glass reads the surface behind it)
 //   scene.ply                                   the scene as a triangle mesh
-//   synth.json                                  scene, seed, options, generation time
+//   synth.json                                  scene, seed, options, generation time, and
+//                                               clear_glass_sensor: shares of clear-glass pixels
+//                                               that are holes / read behind / read the glass
 #pragma once
 
 #include <cmath>
@@ -44,7 +52,31 @@ struct KinectModelOptions {
   double noise_b_per_m = 0.0019;
   double ir_return_probability = 0.03;  // share of IR-failing pixels that still return depth
   double grazing_angle_deg = 82.0;      // steeper incidence drops the return
+  // Clear glass (Material::kClearGlass). Each pixel whose first surface is clear glass (in range,
+  // not beyond grazing_angle_deg) draws one outcome. With theta the angle between the glass's
+  // normal and the ray (0 = the glass faces the camera):
+  //   P(glass surface) = glass_surface_probability * cos(theta)^glass_surface_exponent
+  //   P(hole)          = glass_hole_probability * cos(theta)^glass_hole_exponent
+  //   P(through)       = the rest: the light passes the glass and the sensor reads what is behind.
+  // Both glass-surface returns and holes are most common where the glass faces the camera;
+  // oblique glass is mostly seen through. A glass-surface return is
+  // measured like any surface (noise, shadow). A reading through the glass gives the depth of the
+  // first surface behind it that is not clear glass (what colour sees, SynthFrame::visible_depth),
+  // moved by refraction: plus glass_through_offset_m plus a Gaussian of glass_through_sigma_m,
+  // then the usual noise; it is a hole where that surface fails infrared, lies out of range, at a
+  // grazing angle or in the projector's shadow. Fitted to RealSense D435 frames of clear objects
+  // (tests/glass_sensor_stats.py).
+  double glass_surface_probability = 0.41;  // glass-surface returns at head-on incidence, 0-1
+  double glass_surface_exponent = 2.0;      // their fall-off with cos(theta), >= 0
+  double glass_hole_probability = 0.55;     // holes at head-on incidence, 0-1
+  double glass_hole_exponent = 1.5;         // their fall-off with cos(theta), >= 0
+  double glass_through_offset_m = 0.012;    // mean extra depth of readings through glass, metres
+  double glass_through_sigma_m = 0.006;     // standard deviation of that extra depth, metres
   bool Check(std::string* message = nullptr) const;
+  // A sensor that treats clear glass like the other IR-failing materials: a hole but for
+  // ir_return_probability of glass-surface returns, at any angle (no reading through it).
+  // For tests of what the fill does with large clear-glass holes.
+  static KinectModelOptions ClearGlassAsHoles();
 };
 
 struct SynthOptions {
@@ -63,6 +95,13 @@ struct SynthOptions {
   bool Check(std::string* message = nullptr) const;
 };
 
+// What the sensor read on a clear-glass pixel (SynthFrame::glass_reading).
+enum class GlassReading : uint8_t {
+  kNone = 0,     // not clear glass, or a hole
+  kSurface = 1,  // the glass surface itself (a specular return)
+  kThrough = 2,  // the surface behind the glass
+};
+
 // One rendered frame before it is written.
 struct SynthFrame {
   double timestamp = 0;
@@ -73,7 +112,22 @@ struct SynthFrame {
   cv::Mat visible_depth;  // CV_32FC1 metres to the first surface that is not clear glass
   cv::Mat label;          // CV_8UC1 Material of the first hit, kNoSurface where none
   cv::Mat hole_reason;    // CV_8UC1 HoleCode: why raw_disparity is 2047
+  // CV_8UC1 GlassReading: on clear glass, whether the depth read is the glass's own or the
+  // surface's behind it. Clear-glass pixels keep their label (the truth stays the glass's own
+  // surface, true_depth); those read through it are valid readings, not holes.
+  cv::Mat glass_reading;
 };
+
+// What the sensor gave on the clear-glass pixels of one or more frames.
+struct ClearGlassStats {
+  size_t pixels = 0;   // clear glass is the first surface
+  size_t holes = 0;    // raw 2047 (any HoleCode)
+  size_t through = 0;  // read the surface behind the glass
+  size_t surface = 0;  // read the glass surface
+  double Share(size_t n) const { return pixels ? static_cast<double>(n) / pixels : 0.0; }
+  ClearGlassStats& operator+=(const ClearGlassStats& o);
+};
+ClearGlassStats CountClearGlass(const SynthFrame& frame);
 
 // Whether a depth filled in on a clear-glass pixel is "reported as glass": within 2% of the
 // glass's own depth (true_depth) and more than 5% off the background the colour camera sees
@@ -103,6 +157,7 @@ struct SynthSummary {
   int frames = 0;
   double seconds_per_frame = 0;  // render + write, wall clock
   double hole_fraction = 0;      // share of sensor pixels at 2047
+  ClearGlassStats clear_glass;   // what the sensor read on clear glass, all frames
   std::string BriefReport() const;
 };
 

@@ -26,11 +26,14 @@ class LoopScene : public ::testing::Test {
     delete scene_;
     delete poses_;
   }
-  // Keyframe `id` rendered at frame i of the loop, its pose as given.
+  // Keyframe `id` rendered at frame i of the loop, its pose as given. The sensor reads nothing
+  // on clear glass: with the default sensor's readings on the clear bottle, the first query
+  // (frame 55) verifies against frame 0 with 19 RANSAC inliers instead of 21, one short of the 20
+  // needed, and the three consecutive queries this suite's scenario needs are not there.
   std::shared_ptr<const LoopKeyframe> Keyframe(int id, int i, const SE3& world_from_camera) {
     const Camera camera = synth::SynthCamera();
-    const synth::SynthFrame f =
-        synth::RenderFrame(*scene_, camera, (*poses_)[i], synth::KinectModelOptions{}, 3, i);
+    const synth::SynthFrame f = synth::RenderFrame(
+        *scene_, camera, (*poses_)[i], synth::KinectModelOptions::ClearGlassAsHoles(), 3, i);
     RgbdFrame frame = synth::ToRgbdFrame(f, i);
     SurfOptions surf;
     surf.upright = true;
