@@ -31,7 +31,7 @@ TEST(Config, SettingsListEveryStageWithItsValues) {
   EXPECT_EQ(j["tracker"]["pyramid_levels"], 3);
   EXPECT_EQ(j["tracker"]["icp"]["iterations"].get<std::vector<int>>(),
             (std::vector<int>{10, 6, 2}));
-  EXPECT_EQ(j["tracker"]["keyframes"]["max_translation_m"], 0.03);
+  EXPECT_EQ(j["tracker"]["keyframes"]["max_translation_m"], 0.02);
   EXPECT_EQ(j["fill"]["pairs"]["min_matches"], 40);
   EXPECT_EQ(j["fill"]["pairs"]["refine"]["photometric"], true);
   EXPECT_EQ(j["fill"]["stereo"]["sgbm"]["block_size"], 5);

@@ -42,12 +42,10 @@ namespace gf {
 
 // When a frame becomes a keyframe. A keyframe is tracked against, filled by stereo, searched for
 // loops and stored: each costs the fill and the loop search (about 0.35 s of CPU on a 2-core
-// machine), so a new one comes when the view has changed enough to add to the map: 3 cm of travel
-// is about 13 px of parallax at the 1.2 m of a desk scene (f = 525 px). The stereo fill pairs a
-// keyframe with any earlier one, so its baseline does not depend on this spacing.
+// machine). 2 cm of travel is about 9 px of parallax at the 1.2 m of a desk scene (f = 525 px).
 struct KeyframePolicy {
   double max_rotation_deg = 5.0;    // new keyframe beyond this rotation from the keyframe
-  double max_translation_m = 0.03;  // ... or this translation, metres
+  double max_translation_m = 0.02;  // ... or this translation, metres
   double min_overlap = 0.7;         // ... or when fewer of the frame's points land on it
   int min_feature_inliers = 25;     // ... or when fewer features match it (features on)
   // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
