@@ -75,9 +75,10 @@ struct TrackerOptions {
   // Time from the exposure of the depth image's first row to its last, seconds (0: a global
   // shutter, as synthetic data and time-of-flight cameras have). The Kinect v1's depth comes from
   // a rolling-shutter infrared sensor read out over the frame period: 1/30 s at 30 frames/s
-  // (rolling_shutter.h). With it, each frame is first aligned as the sensor gave it; the motion
-  // since the last frame, so measured, moves the frame's points to its stamp's instant; the moved
-  // frame is aligned again, and its pose is the camera's at the stamp.
+  // (rolling_shutter.h). With it, the camera's velocity over the last tracked step moves each
+  // frame's points to its stamp's instant before the frame is aligned, and its pose is the
+  // camera's at the stamp (where no step is known yet, the frame is aligned as the sensor gave it,
+  // moved with the step that measured and aligned again).
   double depth_readout_s = 1.0 / 30.0;
   // The order of the readout's lines (rolling_shutter.h): camera.json's depth_readout_order.
   std::string depth_readout_order = "top_to_bottom";
