@@ -7,10 +7,10 @@
 // Thread-safety: Start, WaitFor, Join and error from the owning thread.
 #pragma once
 
-#include <chrono>
 #include <pthread.h>
 #include <time.h>
 
+#include <chrono>
 #include <condition_variable>
 #include <exception>
 #include <functional>
