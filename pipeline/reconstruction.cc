@@ -431,14 +431,13 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
     error = std::make_exception_ptr(InputError(source.Input(), "no frames in the selected range"));
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   ReconstructionSummary summary = Summarise(source, *s, error, stop_reason, seconds);
-  summary.cpu_seconds = ProcessCpuSeconds() - cpu_start;
   summary.report["stages"]["cpu_seconds"] =
       CpuReport({{"read", s->reader->cpu_seconds()},
                  {"track", s->tracker->cpu_seconds()},
                  {"fill", s->fill ? s->fill->cpu_seconds() : 0.0},
                  {"fusion", s->fusion ? s->fusion->cpu_seconds() : 0.0},
                  {"loop_closure", s->loop ? s->loop->cpu_seconds() : 0.0}},
-                summary.cpu_seconds, seconds);
+                ProcessCpuSeconds() - cpu_start, seconds);
   summary.report["stages"]["peak_resident_mib"] = PeakResidentMiB();
   if (!summary.complete && summary.stopped_during.empty())
     summary.stopped_during = error ? error_phase : stop_phase;

@@ -114,7 +114,6 @@ struct ReconstructionSummary {
   long surfels = 0;        // in map.ply
   double seconds = 0;      // the whole run, the fill's tail after tracking included
   double fps = 0;          // frames / seconds
-  double cpu_seconds = 0;  // CPU time of the whole process over those seconds, every thread
   bool most_lost = false;  // tracking was lost on more than kMostFramesLost of the frames
   std::vector<std::string> warnings;           // also in the report
   nlohmann::ordered_json report;               // report.json as written
