@@ -36,7 +36,17 @@ enum class HoleCode : uint8_t {
 
 // Where a pixel's depth came from: the `source` field of map.ply and of every filled depth image.
 // kCarried: stereo depth of earlier keyframes carried into this one (sfm/fill_carry.h).
-enum class DepthSource : uint8_t { kNone = 0, kSensor = 1, kStereo = 2, kColmap = 3, kCarried = 4 };
+// kTransparent: a surface the sensor both reads and sees through (clear glass), found by the
+// map's fusion (surfels/fusion.h, FusionOptions::glass). (3 was taken by the COLMAP fill first.)
+enum class DepthSource : uint8_t {
+  kNone = 0,
+  kSensor = 1,
+  kStereo = 2,
+  kColmap = 3,
+  kCarried = 4,
+  kTransparent = 5,
+};
+inline constexpr size_t kDepthSources = 6;  // the values of DepthSource
 
 class DepthConvention {
  public:

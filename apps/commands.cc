@@ -112,6 +112,10 @@ void AddSynthCommand(CLI::App& app) {
   });
 }
 
+constexpr const char* kNoGlassHelp =
+    "no transparent surfels: clear glass that the sensor both reads and sees through is treated "
+    "as any surface (the setting glass.enabled)";
+
 void AddReconstructCommand(CLI::App& app) {
   auto options = std::make_shared<ReconstructOptions>();
   auto args = std::make_shared<InputArgs>();
@@ -157,8 +161,12 @@ void AddReconstructCommand(CLI::App& app) {
                 "folder without the marker, or the input, is never replaced)");
   cmd->add_flag("--allow-lost", options->allow_lost,
                 "accept a run that loses tracking on most frames (exit 0 with a warning)");
-  cmd->callback([options, args, range, frames, no_fill, no_fusion, no_loops, sweep_all] {
+  auto no_glass = std::make_shared<bool>(false);
+  cmd->add_flag("--no-glass", *no_glass, kNoGlassHelp);
+  cmd->callback([options, args, range, frames, no_fill, no_fusion, no_loops, sweep_all,
+                 no_glass] {
     if (!options->config_file.empty()) ApplyConfigFile(options->config_file, &options->pipeline);
+    if (*no_glass) options->pipeline.fusion_options.fusion.glass.enabled = false;
     if (*sweep_all) options->pipeline.fill_options.stereo.plane_sweep_always = true;
     options->pipeline.fill = !*no_fill;
     options->pipeline.fusion = !*no_fusion;
@@ -201,8 +209,11 @@ void AddCompareCommand(CLI::App& app) {
                 ".glassfusion-run lists");
   cmd->add_flag("--allow-lost", options->allow_lost,
                 "accept a run that loses tracking on most frames");
-  cmd->callback([options, args, range, frames] {
+  auto no_glass = std::make_shared<bool>(false);
+  cmd->add_flag("--no-glass", *no_glass, kNoGlassHelp);
+  cmd->callback([options, args, range, frames, no_glass] {
     if (!options->config_file.empty()) ApplyConfigFile(options->config_file, &options->pipeline);
+    if (*no_glass) options->pipeline.fusion_options.fusion.glass.enabled = false;
     options->input = args->input;
     options->source = args->ToOptions();
     if (frames->count() > 0)
@@ -438,7 +449,10 @@ void AddDemoCommand(CLI::App& app) {
   cmd->add_option("--config", options->config_file,
                   "JSON file of tracker and fill settings for the reconstruction, as for "
                   "reconstruct");
-  cmd->callback([options, frames] {
+  auto no_glass = std::make_shared<bool>(false);
+  cmd->add_flag("--no-glass", *no_glass, kNoGlassHelp);
+  cmd->callback([options, frames, no_glass] {
+    options->glass = !*no_glass;
     options->frames = FrameCountOf(*frames, "demo");
     RunDemo(*options);
   });

@@ -148,6 +148,7 @@ json ScoreMapFile(const std::string& map_path, const Trajectory& est, const Trut
     if (score.per_material[m].observed > 0)
       per_material[truth->materials[m]] = Within(score.per_material[m]);
   const int stereo = static_cast<int>(DepthSource::kStereo);
+  const int glass = static_cast<int>(DepthSource::kTransparent);
   return {
       {"completeness", {{"overall", Within(score.overall)}, {"per_material", per_material}}},
       {"accuracy",
@@ -156,7 +157,12 @@ json ScoreMapFile(const std::string& map_path, const Trajectory& est, const Trut
         {"fill_surfels", score.source_points[stereo]},
         {"fill_median_m",
          score.source_points[stereo] ? json(score.source_median_m[stereo]) : json()},
-        {"fill_p90_m", score.source_points[stereo] ? json(score.source_p90_m[stereo]) : json()}}},
+        {"fill_p90_m", score.source_points[stereo] ? json(score.source_p90_m[stereo]) : json()},
+        {"transparent_surfels", score.source_points[glass]},
+        {"transparent_median_m",
+         score.source_points[glass] ? json(score.source_median_m[glass]) : json()},
+        {"transparent_p90_m",
+         score.source_points[glass] ? json(score.source_p90_m[glass]) : json()}}},
       {"ate_m", ate.ate_rmse_m}};
 }
 
@@ -265,15 +271,25 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
           " mm, 90% within " +
           std::to_string(static_cast<int>(std::round(1000 * a["fill_p90_m"].get<double>()))) +
           " mm (" + std::to_string(a["fill_surfels"].get<long>()) + " surfels).");
+    if (a.contains("transparent_median_m") && a["transparent_median_m"].is_number())
+      r->Paragraph("Accuracy of the transparent surfels (clear glass the sensor both read and saw "
+                   "through): median distance to the true surface " +
+                   std::to_string(static_cast<int>(
+                       std::round(1000 * a["transparent_median_m"].get<double>()))) +
+                   " mm, 90% within " +
+                   std::to_string(static_cast<int>(
+                       std::round(1000 * a["transparent_p90_m"].get<double>()))) +
+                   " mm (" + std::to_string(a["transparent_surfels"].get<long>()) + " surfels).");
   }
   std::vector<std::vector<std::string>> sizes;
   for (const char* v : {"with_fill", "without_fill"}) {
     const json& s = c[v]["surfels"];
     sizes.push_back({v, std::to_string(s["count"].get<long>()),
                      std::to_string(s["by_source"]["sensor"].get<long>()),
-                     std::to_string(s["by_source"]["stereo_fill"].get<long>())});
+                     std::to_string(s["by_source"]["stereo_fill"].get<long>()),
+                     std::to_string(s["by_source"].value("transparent", 0L))});
   }
-  r->Table({"map", "surfels", "from the sensor", "from the stereo fill"}, sizes);
+  r->Table({"map", "surfels", "from the sensor", "from the stereo fill", "transparent"}, sizes);
   AddSurfelCountFigure(
       r, {{"with the fill", c["with_fill"]["surfels"]}, {"without", c["without_fill"]["surfels"]}});
   r->Heading("Trajectory");

@@ -15,8 +15,9 @@
 //
 // compare.json: {"with_fill": {...}, "without_fill": {...}}, each with "surfels" (report.json's)
 // and, with ground truth, "completeness" ({"overall", "per_material": {name: ...}}, each
-// {"within_1cm", "within_2cm"} as shares 0-1) and "accuracy" ({"median_m", "p90_m", and
-// "fill_median_m", "fill_p90_m" over the fill's surfels}); plus "ate_m".
+// {"within_1cm", "within_2cm"} as shares 0-1) and "accuracy" ({"median_m", "p90_m",
+// "fill_median_m", "fill_p90_m" over the fill's surfels, "transparent_median_m",
+// "transparent_p90_m" over the transparent ones: clear glass, FusionOptions::glass}); "ate_m".
 #pragma once
 
 #include <nlohmann/json.hpp>

@@ -92,9 +92,11 @@ struct FillScore {
   std::vector<size_t> filled = std::vector<size_t>(kMaterials, 0);
   std::vector<size_t> good = std::vector<size_t>(kMaterials, 0);  // within 3%
   std::vector<std::vector<float>> errors = std::vector<std::vector<float>>(kMaterials);
-  // Filled clear-glass pixels that take the glass's own depth instead of the background's: the
-  // goal is none.
+  // Filled clear-glass pixels that take the glass's own depth instead of the background's where
+  // the map does not mark glass (glass_mask.png): the goal is none. Where it marks glass, the map's
+  // transparent surfels complete the keyframe with the glass's depth on purpose; counted apart.
   size_t clear_glass_at_glass_depth = 0;
+  size_t clear_glass_marked_at_glass_depth = 0;
   double Rate(const std::vector<size_t>& n, int m) const {
     return holes[m] ? static_cast<double>(n[m]) / holes[m] : 0.0;
   }
@@ -111,8 +113,13 @@ void ScoreKeyframe(const std::string& scene_dir, const fs::path& keyframes, cons
       ReadDepthImage((fs::path(scene_dir) / "gt/visible_depth" / (ts + ".png")).string());
   const cv::Mat first_surface =
       ReadDepthImage((fs::path(scene_dir) / "gt/depth" / (ts + ".png")).string());
-  if (holes.empty() || label.empty())
-    throw InputError(keyframes.string(), "keyframe " + ts + ": mask or label missing");
+  // Absent with --no-glass, or when the map holds no glass in the keyframe's view.
+  const fs::path glass_file = keyframes / (ts + ".glass_mask.png");
+  const cv::Mat glass = fs::exists(glass_file)
+                            ? cv::imread(glass_file.string(), cv::IMREAD_UNCHANGED)
+                            : cv::Mat::zeros(label.size(), CV_8U);
+  if (holes.empty() || label.empty() || glass.size() != label.size())
+    throw InputError(keyframes.string(), "keyframe " + ts + ": a mask or the label missing, or of another size");
   const int clear_glass = static_cast<int>(synth::Material::kClearGlass);
   for (int v = 0; v < label.rows; ++v)
     for (int u = 0; u < label.cols; ++u) {
@@ -126,9 +133,10 @@ void ScoreKeyframe(const std::string& scene_dir, const fs::path& keyframes, cons
       const double e = std::abs(z - t) / t;
       score->errors[m].push_back(static_cast<float>(e));
       score->good[m] += e <= 0.03;
-      score->clear_glass_at_glass_depth +=
-          m == clear_glass &&
-          synth::AtClearGlassDepth(z, first_surface.at<uint16_t>(v, u) / truth_scale, t);
+      if (m == clear_glass &&
+          synth::AtClearGlassDepth(z, first_surface.at<uint16_t>(v, u) / truth_scale, t))
+        ++(glass.at<uint8_t>(v, u) ? score->clear_glass_marked_at_glass_depth
+                                   : score->clear_glass_at_glass_depth);
     }
 }
 
@@ -217,9 +225,11 @@ void AddFillSections(HtmlReport* r, const FillScore& fill) {
   const int clear_glass = static_cast<int>(synth::Material::kClearGlass);
   r->Paragraph(
       "Filled clear-glass pixels that take the glass's depth instead of the "
-      "background's (the goal is none): " +
+      "background's where the map marks no glass (the goal is none): " +
       std::to_string(fill.clear_glass_at_glass_depth) + " of " +
-      std::to_string(fill.filled[clear_glass]) + ".");
+      std::to_string(fill.filled[clear_glass]) + "; where it marks glass (completed from its " +
+      "transparent surfels on purpose): " +
+      std::to_string(fill.clear_glass_marked_at_glass_depth) + ".");
   r->Figure(HistogramSvg(errors, 10.0, 40, "error of a filled pixel, % of the true depth"),
             "Errors of all " + std::to_string(errors.size()) +
                 " filled keyframe pixels (the last bar: 10% and more).");
@@ -262,6 +272,7 @@ void RunDemo(const DemoOptions& options) {
   ReconstructOptions compare;
   compare.config_file = options.config_file;
   if (!options.config_file.empty()) ApplyConfigFile(options.config_file, &compare.pipeline);
+  if (!options.glass) compare.pipeline.fusion_options.fusion.glass.enabled = false;
   // An earlier demo's files go (only those its marker lists); compare/ is a run folder of its own,
   // replaced by its own marker below.
   RunFolder::Options folder_options;
@@ -310,6 +321,7 @@ void RunDemo(const DemoOptions& options) {
         {"hole_fraction", sensor.pixels[m] ? double(sensor.holes[m]) / sensor.pixels[m] : 0.0}};
   report["fill_by_material"] = FillJson(fill);
   report["clear_glass_filled_at_glass_depth"] = fill.clear_glass_at_glass_depth;
+  report["clear_glass_marked_at_glass_depth"] = fill.clear_glass_marked_at_glass_depth;
   report["compare"] = c.compare;
   report["config_file"] =
       options.config_file.empty() ? nlohmann::json() : nlohmann::json(options.config_file);

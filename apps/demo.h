@@ -28,6 +28,7 @@ struct DemoOptions {
   int frames = 30;          // frames of the glass scene
   std::string config_file;  // --config FILE: tracker and fill settings for the reconstruction
                             // (pipeline/settings.h), as `reconstruct --config` takes them
+  bool glass = true;        // false (--no-glass): no transparent surfels (FusionOptions::glass)
   bool Check(std::string* message = nullptr) const;
 };
 

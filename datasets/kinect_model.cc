@@ -2,6 +2,7 @@
 // sensor on every pixel (noise, quantisation, range, shadows, IR-failing materials, clear glass).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/core/utility.hpp>
 
 #include "acquisition/depth.h"
@@ -16,6 +17,24 @@ double HashGaussian(int x, int y, int frame, uint32_t seed) {
   const double u1 = std::max(1e-12, static_cast<double>(HashUniform(x, y, frame, seed)));
   const double u2 = HashUniform(x, y, frame, seed ^ 0xA5A5A5A5u);
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+}
+
+// The uniform draw of pixel (u, v) shared by its patch: the cell of a grid of spacing patch_px
+// whose jittered centre is nearest (a Voronoi cell; 0: the pixel's own draw).
+double PatchUniform(int u, int v, int frame, uint32_t seed, double patch_px) {
+  if (!(patch_px > 0)) return HashUniform(u, v, frame, seed);
+  const int cell_u = static_cast<int>(std::floor(u / patch_px)),
+            cell_v = static_cast<int>(std::floor(v / patch_px));
+  double best = std::numeric_limits<double>::max();
+  int best_u = cell_u, best_v = cell_v;
+  for (int j = cell_v - 1; j <= cell_v + 1; ++j)
+    for (int i = cell_u - 1; i <= cell_u + 1; ++i) {
+      const double x = (i + HashUniform(i, j, frame, seed ^ 0x3Cu)) * patch_px,
+                   y = (j + HashUniform(i, j, frame, seed ^ 0x5Au)) * patch_px;
+      const double d2 = (x - u) * (x - u) + (y - v) * (y - v);
+      if (d2 < best) best = d2, best_u = i, best_v = j;
+    }
+  return HashUniform(best_u, best_v, frame, seed);
 }
 
 // What the Kinect gives for one pixel.
@@ -72,7 +91,7 @@ Reading MeasureClearGlass(const Sensor& s, int u, int v, const Hit& glass, doubl
   if (facing < s.cos_grazing) return Hole(HoleCode::kNoReturn);
   const double p_surface = k.glass_surface_probability * std::pow(facing, k.glass_surface_exponent);
   const double p_hole = k.glass_hole_probability * std::pow(facing, k.glass_hole_exponent);
-  const double draw = HashUniform(u, v, s.frame, s.noise_seed ^ 0x1Eu);
+  const double draw = PatchUniform(u, v, s.frame, s.noise_seed ^ 0x1Eu, k.glass_patch_px);
   if (draw < p_surface) {
     Reading r = Measure(s, u, v, glass.point, glass_z, facing, false);
     if (r.reason == static_cast<uint8_t>(HoleCode::kValid)) r.glass = GlassReading::kSurface;
@@ -104,11 +123,11 @@ bool KinectModelOptions::Check(std::string* message) const {
         glass_surface_probability + glass_hole_probability <= 1 && glass_surface_exponent >= 0 &&
         glass_surface_exponent <= 100 && glass_hole_exponent >= 0 && glass_hole_exponent <= 100 &&
         std::abs(glass_through_offset_m) <= 1 && glass_through_sigma_m >= 0 &&
-        glass_through_sigma_m <= 1)) {
+        glass_through_sigma_m <= 1 && glass_patch_px >= 0 && glass_patch_px <= 1000)) {
     if (message)
       *message =
           "Kinect model: clear glass needs probabilities >= 0 summing to at most 1, exponents in "
-          "[0,100], offset and sigma within 1 m (sigma >= 0)";
+          "[0,100], offset and sigma within 1 m (sigma >= 0), patches of 0-1000 px";
     return false;
   }
   return true;
@@ -119,6 +138,7 @@ KinectModelOptions KinectModelOptions::ClearGlassAsHoles() {
   o.glass_surface_probability = o.ir_return_probability;
   o.glass_hole_probability = 1.0 - o.ir_return_probability;
   o.glass_surface_exponent = o.glass_hole_exponent = 0.0;
+  o.glass_patch_px = 0.0;
   return o;
 }
 

@@ -254,7 +254,8 @@ SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out
                  {"glass_hole_probability", options.kinect.glass_hole_probability},
                  {"glass_hole_exponent", options.kinect.glass_hole_exponent},
                  {"glass_through_offset_m", options.kinect.glass_through_offset_m},
-                 {"glass_through_sigma_m", options.kinect.glass_through_sigma_m}};
+                 {"glass_through_sigma_m", options.kinect.glass_through_sigma_m},
+                 {"glass_patch_px", options.kinect.glass_patch_px}};
   j["materials"] = {"diffuse", "glossy", "dark", "textured_glass", "clear_glass"};
   j["sensor_hole_fraction"] = summary.hole_fraction;
   // What the sensor saw on clear glass, beside the truth (gt/depth is the glass's own surface).

@@ -72,10 +72,17 @@ struct KinectModelOptions {
   double glass_hole_exponent = 1.5;         // their fall-off with cos(theta), >= 0
   double glass_through_offset_m = 0.012;    // mean extra depth of readings through glass, metres
   double glass_through_sigma_m = 0.006;     // standard deviation of that extra depth, metres
+  // The outcome is drawn per patch of pixels, not per pixel: a depth camera matches windows of
+  // its pattern, so neighbouring pixels on glass share their fate (on the real D435 frames a pixel
+  // 8 px from a glass-surface return is one too with probability 0.62-0.64, 4.6 px in a Kinect
+  // image; tests/glass_sensor_stats.py). Patches are the cells of a jittered grid of this
+  // spacing in pixels (nearest jittered centre, so their shapes vary), drawn anew every frame;
+  // 0: every pixel draws its own.
+  double glass_patch_px = 24.0;
   bool Check(std::string* message = nullptr) const;
   // A sensor that treats clear glass like the other IR-failing materials: a hole but for
-  // ir_return_probability of glass-surface returns, at any angle (no reading through it).
-  // For tests of what the fill does with large clear-glass holes.
+  // ir_return_probability of glass-surface returns, at any angle (no reading through it), drawn
+  // per pixel. For tests of what the fill does with large clear-glass holes.
   static KinectModelOptions ClearGlassAsHoles();
 };
 

@@ -29,6 +29,8 @@ const char* SourceName(size_t source) {
       return "colmap";
     case DepthSource::kCarried:
       return "carried_fill";
+    case DepthSource::kTransparent:
+      return "transparent";
     default:
       return "none";
   }
@@ -279,6 +281,8 @@ MapCompletion FusionStage::RenderFills(const SE3& world_from_camera) {
   offer.confidence.setTo(0, ~confirmed);
   offer.occluder_px = options_.completion_occluder_px;
   offer.occluder_margin = margin;
+  if (options_.fusion.glass.enabled)
+    offer.glass = view.source == static_cast<uint8_t>(DepthSource::kTransparent);
   return offer;
 }
 

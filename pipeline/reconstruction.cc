@@ -155,8 +155,8 @@ json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajector
     poses[names[i]] = trajectory[i].world_from_camera;
   const auto start = Clock::now();
   const std::vector<KeyframeFill> keyframes_filled = fill.keyframes();
-  int keyframes = 0, done = 0;
-  long pixels = 0;
+  int keyframes = 0, done = 0, glass_keyframes = 0;
+  long pixels = 0, glass_pixels = 0;
   bool stopped = false;
   for (const KeyframeFill& k : keyframes_filled) {
     if ((stopped = stop())) break;
@@ -164,7 +164,11 @@ json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajector
     const auto pose = poses.find(k.timestamp);
     if (!k.failure.empty() || pose == poses.end()) continue;
     try {
-      const int completed = sink->CompleteKeyframe(k.timestamp, fusion->RenderFills(pose->second));
+      const MapCompletion offer = fusion->RenderFills(pose->second);
+      const int glass = offer.glass.empty() ? 0 : cv::countNonZero(offer.glass);
+      glass_keyframes += glass > 0;
+      glass_pixels += glass;
+      const int completed = sink->CompleteKeyframe(k.timestamp, offer);
       keyframes += completed > 0;
       pixels += completed;
     } catch (const std::exception& e) {
@@ -180,7 +184,9 @@ json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajector
           {"seconds", seconds},
           {"stopped", stopped},
           {"keyframes_done", done},
-          {"keyframes_to_do", static_cast<int>(keyframes_filled.size())}};
+          {"keyframes_to_do", static_cast<int>(keyframes_filled.size())},
+          {"glass_keyframes", glass_keyframes},
+          {"glass_pixels", glass_pixels}};
 }
 
 // Runs `finish`, keeping the first error of the run.

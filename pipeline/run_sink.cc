@@ -181,7 +181,27 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const MapCompletion
   cv::Mat filled, completed, confidence;
   mm.convertTo(filled, CV_32F, 0.001);
   confidence_8u.convertTo(confidence, CV_32F, 1.0 / 255);
+  const bool glass = !offer.glass.empty() && offer.glass.size() == mm.size();
+  if (glass) WriteImage(File("keyframes/" + name + ".glass_mask.png"), offer.glass);
   const int pixels = CompleteFromModel(holes, offer, &filled, &confidence, &completed);
+  const bool any_glass = glass && cv::countNonZero(offer.glass) > 0;
+  if (pixels == 0 && !any_glass) return 0;
+  // The overlay shows the completed pixels orange (they were magenta: holes left empty) and the
+  // glass cyan.
+  const cv::Mat color = cv::imread(base + ".color.png", cv::IMREAD_COLOR);
+  cv::Mat overlay = cv::imread(base + ".fill_overlay.png", cv::IMREAD_COLOR);
+  if (!color.empty() && color.size() == overlay.size() && color.size() == completed.size()) {
+    cv::Mat tinted;
+    cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(0, 165, 255)), 0.5, 0,
+                    tinted);
+    tinted.copyTo(overlay, completed);
+    if (any_glass) {
+      cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(255, 200, 0)), 0.5,
+                      0, tinted);
+      tinted.copyTo(overlay, offer.glass);
+    }
+    WriteImage(File("keyframes/" + name + ".fill_overlay.png"), overlay);
+  }
   if (pixels == 0) return 0;
   // depth_filled.png (what users and the figures read) last: when an earlier write fails it stays
   // as the keyframe's fill left it, and the warning says the keyframe was not completed.
@@ -190,16 +210,6 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const MapCompletion
   confidence.convertTo(confidence_8u, CV_8U, 255.0);
   WriteImage(File("keyframes/" + name + ".fill_confidence.png"), confidence_8u);
   WriteImage(File("undistorted/depth/" + pinhole_file), Undistort(completed_mm, cv::INTER_NEAREST));
-  // The overlay shows the completed pixels orange (they were magenta: holes left empty).
-  const cv::Mat color = cv::imread(base + ".color.png", cv::IMREAD_COLOR);
-  cv::Mat overlay = cv::imread(base + ".fill_overlay.png", cv::IMREAD_COLOR);
-  if (!color.empty() && color.size() == overlay.size() && color.size() == completed.size()) {
-    cv::Mat tinted;
-    cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(0, 165, 255)), 0.5, 0,
-                    tinted);
-    tinted.copyTo(overlay, completed);
-    WriteImage(File("keyframes/" + name + ".fill_overlay.png"), overlay);
-  }
   WriteImage(File("keyframes/" + name + ".depth_filled.png"), completed_mm);
   return pixels;
 }
@@ -256,6 +266,7 @@ void InMemoryRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& fr
 int InMemoryRunSink::CompleteKeyframe(const std::string& name, const MapCompletion& offer) {
   std::lock_guard<std::mutex> lock(mutex_);
   Keyframe& k = keyframes.at(name);
+  k.glass_mask = offer.glass.clone();
   k.fill.filled_depth = k.fill.filled_depth.clone();  // (it may share pixels with the fill's)
   cv::Mat* confidence = nullptr;
   if (k.fill.confidence.type() == CV_32FC1 && k.fill.confidence.size() == offer.depth.size()) {

@@ -51,6 +51,9 @@ struct MapCompletion {
   // behind the object the keyframe saw at the hole's rim, not what the hole holds.
   int occluder_px = 0;
   double occluder_margin = 0.03;
+  // CV_8U, 255 where the map's nearest surface is transparent (clear glass, DepthSource::
+  // kTransparent): the keyframe's glass mask. Empty when the map looks for no glass.
+  cv::Mat glass;
 };
 
 class RunSink {
@@ -99,7 +102,7 @@ class FolderRunSink : public RunSink {
   void WriteReport(const nlohmann::ordered_json& report) override;
   void WriteMap(const std::vector<Surfel>& surfels) override;
   // Rewrites <name>.depth_filled.png and the pinhole depth, and writes <name>.model_fill.png (255
-  // where the model completed the keyframe).
+  // where the model completed the keyframe) and, when the offer has one, <name>.glass_mask.png.
   int CompleteKeyframe(const std::string& name, const MapCompletion& offer) override;
   std::string Where() const override { return out_dir_; }
 
@@ -127,6 +130,7 @@ class InMemoryRunSink : public RunSink {
     RgbdFrame frame;
     CarriedFillResult fill;  // filled_depth and confidence completed by CompleteKeyframe
     cv::Mat model_fill;      // CV_8U: 255 where CompleteKeyframe completed it (empty before)
+    cv::Mat glass_mask;      // CV_8U: the offer's glass mask (MapCompletion::glass)
   };
   void WriteKeyframe(const std::string& name, const RgbdFrame& frame,
                      const CarriedFillResult& fill) override;

@@ -57,6 +57,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(StereoFillOptions, plane_sweep_forward, plane
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing, agreement,
                                    correct_own_fills)
 
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(GlassOptions, enabled, min_readings_on, min_through_share,
+                                   stable_confidence)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixel_step,
                                    fill_pixel_step, max_depth_gap_m, max_normal_angle_deg,
                                    normal_test_min_facing, max_radius_ratio, confidence_sigma,
@@ -99,6 +101,7 @@ nlohmann::json SettingsTree(const ReconstructionOptions& o) {
             {"stereo", fill.stereo},
             {"carry", fill.carry}}},
           {"fusion", o.fusion_options},
+          {"glass", o.fusion_options.fusion.glass},
           {"loop_closure", o.loop_options}};
 }
 
@@ -168,6 +171,7 @@ void ApplyConfig(const std::string& text, const std::string& path, Reconstructio
     fill.at("stereo").get_to(f.stereo);
     fill.at("carry").get_to(f.carry);
     merged.at("fusion").get_to(o.fusion_options);
+    merged.at("glass").get_to(o.fusion_options.fusion.glass);
     merged.at("loop_closure").get_to(o.loop_options);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path, std::string("bad setting: ") + e.what());
@@ -184,6 +188,7 @@ void ApplyConfig(const std::string& text, const std::string& path, Reconstructio
   if (!f.stereo.Check(&problem)) refuse("fill.stereo");
   if (!f.carry.Check(&problem)) refuse("fill.carry");
   if (!f.Check(&problem)) refuse("fill");
+  if (!o.fusion_options.fusion.glass.Check(&problem)) refuse("glass");
   if (!o.fusion_options.Check(&problem)) refuse("fusion");
   if (!o.loop_options.Check(&problem)) refuse("loop_closure");
   *options = o;

@@ -150,7 +150,7 @@ MapScore ScoreMap(const std::vector<Surfel>& map, const TriangleMesh& mesh, cons
     std::vector<int> index(1);
     std::vector<float> d2(1);
     std::vector<double> all;
-    std::array<std::vector<double>, 5> by_source;
+    std::array<std::vector<double>, kDepthSources> by_source;
     for (const Surfel& s : map) {
       const Eigen::Vector3f& p = s.position;
       if (tree.nearestKSearch(pcl::PointXYZ(p.x(), p.y(), p.z()), 1, index, d2) < 1) continue;
@@ -160,11 +160,11 @@ MapScore ScoreMap(const std::vector<Surfel>& map, const TriangleMesh& mesh, cons
       const double plane = n.norm() > 0 ? std::abs(n.normalized().dot(p - a)) : std::sqrt(d2[0]);
       const double d = std::min<double>(plane, std::sqrt(d2[0]));
       all.push_back(d);
-      by_source[std::min<size_t>(s.source, 4)].push_back(d);
+      by_source[std::min<size_t>(s.source, kDepthSources - 1)].push_back(d);
     }
     score.accuracy_median_m = Quantile(all, 0.5);
     score.accuracy_p90_m = Quantile(all, 0.9);
-    for (size_t k = 0; k < 5; ++k) {
+    for (size_t k = 0; k < kDepthSources; ++k) {
       score.source_points[k] = static_cast<long>(by_source[k].size());
       score.source_median_m[k] = Quantile(by_source[k], 0.5);
       score.source_p90_m[k] = Quantile(by_source[k], 0.9);

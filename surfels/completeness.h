@@ -62,8 +62,9 @@ struct MapScore {
   std::array<Completeness, 256> per_material;  // by the mesh's material label
   long map_points = 0;
   double accuracy_median_m = 0, accuracy_p90_m = 0;
-  std::array<double, 5> source_median_m{}, source_p90_m{};  // by DepthSource (0 when none)
-  std::array<long, 5> source_points{};
+  // By DepthSource (0 when none).
+  std::array<double, kDepthSources> source_median_m{}, source_p90_m{};
+  std::array<long, kDepthSources> source_points{};
   std::string BriefReport() const;
 };
 

@@ -18,6 +18,16 @@ constexpr double kDegToRad = M_PI / 180.0;
 
 }  // namespace
 
+bool GlassOptions::Check(std::string* message) const {
+  // A surfel's counts halve together before they overflow 16 bits.
+  FieldCheck c(message);
+  c.In("min_readings_on", min_readings_on, 1, 30000, "is more than a surfel's count holds")
+      .In("min_through_share", min_through_share, 0, 1, kMoreThanOne)
+      .Above("stable_confidence", stable_confidence, 0, kMaxCaptureFrames,
+             kMoreFramesThanACapture);
+  return c.ok();
+}
+
 bool FusionOptions::Check(std::string* message) const {
   // Confidence grows by a measurement's weight (at most 1) per frame that sees a surfel, so a
   // threshold beyond a day's capture is never reached. The radial weight's sigma is in half image
@@ -53,7 +63,8 @@ bool FusionOptions::Check(std::string* message) const {
       .In("normal_filter_px", normal_filter_px, 1, kMaxImageSidePx / 2,
           "is larger than any half-size image")
       .Above("normal_filter_depth_m", normal_filter_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
-      .In("normal_baseline_px", normal_baseline_px, 1, kMaxImageSidePx, kLargerThanAnyImage);
+      .In("normal_baseline_px", normal_baseline_px, 1, kMaxImageSidePx, kLargerThanAnyImage)
+      .Part("glass", glass);
   return c.ok();
 }
 
@@ -369,7 +380,6 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
   // Merge and create, one pixel after the other (several pixels may update one surfel).
   const Eigen::Matrix3f r_wc = m.world_from_camera.RotationMatrix().cast<float>();
   const Eigen::Vector3f t_wc = m.world_from_camera.translation().cast<float>();
-  const uint8_t sensor = static_cast<uint8_t>(DepthSource::kSensor);
   const bool fill = m.source != DepthSource::kSensor;
   // Pixel order is not map order: the surfel kPrefetch pixels ahead is fetched early.
   for (size_t j = 0; j < results.size(); ++j) {
@@ -389,7 +399,7 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
         s.radius = (c * s.radius + a * res.radius) / sum;
       }
       s.confidence =
-          fill && s.source != sensor
+          fill && IsFillSource(s.source)
               ? WithCorroboration(
                     FillConfidence(s, sum, m.keyframe, in_camera_[res.match].z(), res.point.z()),
                     res.corroborated)
@@ -404,7 +414,7 @@ void SurfelFusion::Integrate(const Measurement& m, const std::vector<PixelResult
       s.normal = n;
       s.radius = res.radius;
       s.confidence = WithCorroboration(res.weight, res.corroborated);
-      s.first_frame = s.last_frame = frame_;
+      s.last_frame = frame_;
       s.keyframe = m.keyframe;
       s.red = res.red, s.green = res.green, s.blue = res.blue;
       s.source = static_cast<uint8_t>(res.source);
@@ -430,11 +440,15 @@ float SurfelFusion::WithCorroboration(float confidence, bool corroborated) const
              : confidence;
 }
 
+float SurfelFusion::StableConfidence(uint8_t source) const {
+  if (source == static_cast<uint8_t>(DepthSource::kSensor)) return options_.stable_confidence;
+  if (source == static_cast<uint8_t>(DepthSource::kTransparent))
+    return options_.glass.stable_confidence;
+  return options_.fill_stable_confidence;
+}
+
 bool SurfelFusion::IsStable(const Surfel& s) const {
-  if (s.removed()) return false;
-  return s.source == static_cast<uint8_t>(DepthSource::kSensor)
-             ? s.confidence >= options_.stable_confidence
-             : s.confidence >= options_.fill_stable_confidence;
+  return !s.removed() && s.confidence >= StableConfidence(s.source);
 }
 
 std::vector<Surfel> SurfelFusion::StableSurfels() const {
@@ -449,7 +463,7 @@ SurfelCounts SurfelFusion::Counts() const {
   for (size_t i = 0; i < map_.size(); ++i) {
     const Surfel& s = map_[i];
     if (s.removed()) continue;
-    const size_t k = std::min<size_t>(s.source, 4);
+    const size_t k = std::min<size_t>(s.source, kDepthSources - 1);
     if (IsStable(s)) {
       ++c.stable[k];
       c.stable_area_m2[k] += M_PI * s.radius * s.radius;
@@ -466,7 +480,8 @@ size_t SurfelFusion::MemoryBytes() const {
          normal_radius_.capacity() * sizeof(Eigen::Vector4f) +
          results_.capacity() * sizeof(PixelResult) +
          (pixel_of_.capacity() + visible_.capacity() + partner_.capacity()) * sizeof(int32_t) +
-         seen_through_.capacity() + entry_flags_.capacity() + chunks_.capacity() * sizeof(Chunk);
+         readings_.capacity() * sizeof(EntryReadings) + entry_flags_.capacity() +
+         chunks_.capacity() * sizeof(Chunk);
 }
 
 void SurfelFusion::MoveWithKeyframes(const std::vector<SE3>& correction) {

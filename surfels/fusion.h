@@ -64,6 +64,36 @@ inline constexpr uint8_t kCorroboratedFill = 128;
 inline constexpr long kMaxMapBytes = 16L << 30;
 inline constexpr long kMaxMapSurfels = kMaxMapBytes / static_cast<long>(sizeof(Surfel));
 
+// Clear glass in the map: a surface the sensor both reads and sees through. Over the frames that
+// see a sensor surfel, the sensor's readings at its pixel and the four next to it (the rays
+// through its disc) are counted: those whose depth lands on it (within free_space_margin) and
+// those that see through it (farther by more; Surfel::readings_on, readings_through). An opaque
+// surface in the right place is seen through only beyond its outline, by at most one of the five
+// (a fifth), and only while the pose is a pixel off; clear glass lets most of the light through (real D435 frames:
+// 44-86% of the readings on clear objects lie behind them, tests/glass_sensor_stats.py) and
+// returns the rest from its surface or not at all, in patches. So:
+//  - a surfel that views after the one that made it read at least min_readings_on times is not
+//    removed by one view that sees through it (it loses free_space_penalty, as a stable one);
+//  - a sensor surfel read at least min_readings_on times with at least min_through_share of its
+//    readings through it is DepthSource::kTransparent (and back when the share falls): the
+//    free-space rule leaves it be while views keep reading it (one that no view read for
+//    unstable_frames frames goes when the sensor sees through it), and it is part of the model
+//    from stable_confidence, the summed weight of the views that read it.
+struct GlassOptions {
+  bool enabled = true;
+  // Readings that landed on the surfel in the views after the one that made it, at least: more
+  // than one view's five, so that a glass surface needs two views that read it.
+  int min_readings_on = 6;
+  // Of the readings that landed on it or passed it, the share that passed it, 0-1: more than the
+  // fifth an outline can give (with a pixel of pose error on top).
+  double min_through_share = 1.0 / 3;
+  // A transparent surfel is stable from this confidence (the weight of the sensor's readings that
+  // merged into it; a head-on view adds up to 1): clear glass returns a reading on a fraction of
+  // its pixels, so it reaches the sensor's stable_confidence many times later than a wall.
+  double stable_confidence = 3.0;
+  bool Check(std::string* message = nullptr) const;
+};
+
 struct FusionOptions {
   double min_depth_m = 0.3;  // measurements outside [min_depth_m, max_depth_m] are not fused
   double max_depth_m = 4.0;  // (Kinect noise grows with the square of depth)
@@ -116,6 +146,7 @@ struct FusionOptions {
   int normal_filter_px = 5;
   double normal_filter_depth_m = 0.05;
   int normal_baseline_px = 2;
+  GlassOptions glass;  // clear glass: surfels the sensor both reads and sees through
   // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
   // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
@@ -128,6 +159,7 @@ struct FusionStats {
   int created = 0;       // ... that started one
   int removed = 0;       // surfels removed after the step
   int contradicted = 0;  // surfels the sensor saw through
+  int transparent = 0;   // surfels that turned transparent (FusionOptions::glass)
   int redundant = 0;     // surfels merged into another of the same surface
   int over_budget = 0;   // surfels removed to keep the map within max_surfels
   double ms = 0;
@@ -149,9 +181,10 @@ struct MapView {
 
 // Surfel counts and area by source (index: DepthSource).
 struct SurfelCounts {
-  std::array<long, 5> stable{};            // surfels that reached their source's stable confidence
-  std::array<long, 5> unstable{};          // ... that have not
-  std::array<double, 5> stable_area_m2{};  // sum of pi r^2 of the stable ones
+  std::array<long, kDepthSources> stable{};    // surfels that reached their source's stable
+                                               // confidence
+  std::array<long, kDepthSources> unstable{};  // ... that have not
+  std::array<double, kDepthSources> stable_area_m2{};  // sum of pi r^2 of the stable ones
   long total_stable() const;
 };
 
@@ -172,6 +205,8 @@ class SurfelFusion {
 
   const SurfelMap& map() const { return map_; }
   bool IsStable(const Surfel& s) const;
+  // The confidence from which a surfel of `source` (a DepthSource) is stable.
+  float StableConfidence(uint8_t source) const;
   // The stable surfels (the model), in map order.
   std::vector<Surfel> StableSurfels() const;
   SurfelCounts Counts() const;
@@ -360,10 +395,18 @@ class SurfelFusion {
   std::vector<Front> front_;
   std::vector<PixelResult> results_;  // per measured pixel of the step
   // Per step, kept between steps (a step allocates only while the map grows, and in the rare
-  // budget pass): the depth at half size and bilateral-filtered (for normals); per entry, whether
-  // the sensor saw through it and the copy it merges into.
+  // budget pass): the depth at half size and bilateral-filtered (for normals); per entry, the
+  // sensor's readings around it (RemoveSeenThrough) and the copy it merges into.
   cv::Mat half_depth_, smooth_half_;
-  std::vector<uint8_t> seen_through_;
+  // The sensor pixels in the 3x3 around an entry's pixel: measured, seeing through it; of the
+  // pixel and its four neighbours, those landing on it and seeing through it (the glass counts);
+  // whether the sensor saw through it (free space: not updated, every measured one through it,
+  // at least five measured); and whether its source turned transparent, or back.
+  struct EntryReadings {
+    uint8_t measured = 0, through = 0, counted = 0, counted_on = 0, counted_through = 0;
+    bool seen_through = false, turned = false;
+  };
+  std::vector<EntryReadings> readings_;
   std::vector<int32_t> partner_;
 };
 

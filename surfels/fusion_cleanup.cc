@@ -21,7 +21,7 @@ void SurfelFusion::CleanUp(const Measurement& m, FusionStats* stats) {
   auto stale = [&](size_t i) {
     const Surfel& s = map_[i];
     if (s.removed() || IsStable(s)) return;
-    const bool fill = s.source != static_cast<uint8_t>(DepthSource::kSensor);
+    const bool fill = IsFillSource(s.source);
     const int window = fill ? options_.fill_unstable_frames : options_.unstable_frames;
     if (frame_ - s.last_frame > window) {
       map_.Remove(i);
@@ -63,15 +63,42 @@ void SurfelFusion::CompactMap() {
   }
 }
 
+namespace {
+
+// Adds readings to a surfel's counts (halving the counts and the readings alike until they fit
+// 16 bits) and says whether it is transparent by them (GlassOptions).
+bool CountReadings(int on, int through, const GlassOptions& glass, Surfel* s) {
+  constexpr int kMaxCount = 65535;
+  while (s->readings_on + on > kMaxCount || s->readings_through + through > kMaxCount) {
+    s->readings_on /= 2, s->readings_through /= 2;
+    on /= 2, through /= 2;
+  }
+  s->readings_on = static_cast<uint16_t>(s->readings_on + on);
+  s->readings_through = static_cast<uint16_t>(s->readings_through + through);
+  const int total = s->readings_on + s->readings_through;
+  return s->readings_on >= glass.min_readings_on &&
+         s->readings_through >= glass.min_through_share * total;
+}
+
+}  // namespace
+
 void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
-  // Free space: the surfels projected into this frame (those created just now were not) that the
-  // sensor sees through: every measured depth in the 3x3 pixels around theirs lies farther by more
-  // than free_space_margin, and at least five of them are measured.
+  // The sensor's readings in the 3x3 pixels around each surfel projected into this frame (those
+  // created just now were not): on it (within free_space_margin), through it (farther by more),
+  // or in front of it (an occluder: neither); for the glass counts, only the pixel and its four
+  // neighbours. Free space: a surfel not updated by this frame that
+  // the sensor sees through (every reading around it through it, at least five of them) loses
+  // confidence, unless it is transparent. With FusionOptions::glass, the readings add to the
+  // counts of the sensor's surfels, which decide whether they are transparent.
   const size_t entries = visible_.size();
-  std::vector<uint8_t>& seen_through = seen_through_;
-  seen_through.assign(entries, 0);
+  std::vector<EntryReadings>& readings = readings_;
+  readings.assign(entries, EntryReadings());
   const int width = camera_.width, height = camera_.height;
-  const float margin = static_cast<float>(1.0 + options_.free_space_margin);
+  const float near = static_cast<float>(1.0 - options_.free_space_margin);
+  const float far = static_cast<float>(1.0 + options_.free_space_margin);
+  const GlassOptions& glass = options_.glass;
+  const uint8_t sensor = static_cast<uint8_t>(DepthSource::kSensor);
+  const uint8_t transparent = static_cast<uint8_t>(DepthSource::kTransparent);
   cv::parallel_for_(cv::Range(0, static_cast<int>(entries)), [&](const cv::Range& range) {
     for (int e = range.start; e < range.end; ++e) {
       if (e + kPrefetch < range.end && pixel_of_[e + kPrefetch] >= width &&
@@ -79,34 +106,64 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
         const float* d = m.depth.ptr<float>() + pixel_of_[e + kPrefetch];
         __builtin_prefetch(d - width), __builtin_prefetch(d), __builtin_prefetch(d + width);
       }
-      // Not projected (removed, or outside the image), or updated by this frame.
-      const int pixel = pixel_of_[e];
-      if (pixel < 0 || (entry_flags_[e] & kUpdated)) continue;
+      const int pixel = pixel_of_[e];  // -1: not projected (removed, or outside the image)
+      if (pixel < 0) continue;
       const int x = pixel % width, y = pixel / width;
       if (x < 1 || y < 1 || x + 1 >= width || y + 1 >= height) continue;
       const float z = in_camera_[e].z();
-      int measured = 0;
-      bool behind = true;
-      for (int dy = -1; dy <= 1 && behind; ++dy)
+      EntryReadings r;
+      for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           const float d = m.depth.at<float>(y + dy, x + dx);
           if (!(d > 0)) continue;
-          ++measured;
-          if (d <= z * margin) {
-            behind = false;
-            break;
-          }
+          ++r.measured;
+          // The glass counts: the pixel and its four neighbours, whose rays pass through its disc.
+          const bool counted = dx == 0 || dy == 0;
+          r.through += d > z * far;
+          r.counted += counted;
+          r.counted_on += counted && d >= z * near && d <= z * far;
+          r.counted_through += counted && d > z * far;
         }
-      seen_through[e] = behind && measured >= 5;
+      // Seen through across its disc, or not at all: where an opaque surface's outline crosses
+      // the five, some of them land on it.
+      if (r.counted_through < r.counted || r.counted < 3) r.counted_through = 0;
+      r.seen_through =
+          !(entry_flags_[e] & kUpdated) && r.measured >= 5 && r.through == r.measured;
+      // Entries are distinct surfels: each task writes its own.
+      Surfel& s = map_[visible_[e]];
+      if (glass.enabled && r.counted_on + r.counted_through > 0 && (s.source == sensor || s.source == transparent)) {
+        const uint8_t was = s.source;
+        s.source = CountReadings(r.counted_on, r.counted_through, glass, &s) ? transparent : sensor;
+        r.turned = s.source != was;
+      }
+      readings[e] = r;
     }
   });
   for (size_t e = 0; e < entries; ++e) {
-    if (!seen_through[e]) continue;
+    const EntryReadings& r = readings[e];
     const size_t i = visible_[e];
     Surfel& s = map_[i];
+    if (r.turned) {
+      stats->transparent += s.source == transparent;
+      entry_flags_[e] |= kMayGoStale;  // its stable confidence changed
+      Touch(i);
+    }
+    if (!r.seen_through) continue;
     ++stats->contradicted;
-    const bool stable_sensor =
-        s.source == static_cast<uint8_t>(DepthSource::kSensor) && IsStable(s);
+    if (s.source == transparent) {
+      // Seeing the background through glass is what glass does; glass that the sensor has not
+      // read for unstable_frames frames while seeing through it is not there (an object that
+      // moved away, or a misplaced surface).
+      if (frame_ - s.last_frame > options_.unstable_frames) {
+        map_.Remove(i);
+        ++stats->removed;
+      }
+      continue;
+    }
+    // A stable surface loses confidence; so does, with glass, one that views after the one that
+    // made it read (it may be glass that this view sees through); any other goes.
+    const bool read_again = glass.enabled && s.readings_on >= glass.min_readings_on;
+    const bool stable_sensor = s.source == sensor && (IsStable(s) || read_again);
     const float penalty = static_cast<float>(options_.free_space_penalty);
     if (!stable_sensor || s.confidence - penalty <= 0) {
       // Through the map, not by the penalty: a confidence pushed below zero would read as removed
@@ -147,12 +204,11 @@ void SurfelFusion::MergeRedundant(FusionStats* stats) {
     k.radius = std::min(k.radius, d.radius);
     // Two fills of different keyframes on one surface confirm each other (FindCopies has checked
     // their depths; in_camera_ holds both at this step).
-    const uint8_t sensor = static_cast<uint8_t>(DepthSource::kSensor);
-    k.confidence = k.source != sensor && d.source != sensor
+    k.confidence = IsFillSource(k.source) && IsFillSource(d.source)
                        ? FillConfidence(k, k.confidence + d.confidence, d.keyframe,
                                         in_camera_[keep_entry].z(), in_camera_[drop_entry].z())
                        : k.confidence + d.confidence;
-    k.first_frame = std::min(k.first_frame, d.first_frame);
+    CountReadings(d.readings_on, d.readings_through, options_.glass, &k);
     if (d.last_frame > k.last_frame) {  // it moves with the keyframe that saw it last
       k.last_frame = d.last_frame;
       k.keyframe = d.keyframe;

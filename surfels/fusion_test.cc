@@ -512,14 +512,14 @@ TEST(SurfelFusion, TheSyntheticTableFusedWithTruePosesLiesOnItsSurfaces) {
   EXPECT_LT(within_2cm(synth::Material::kDark), 0.3);
 }
 
-// n live surfels, each with first_frame its index (which identifies it after compaction).
+// n live surfels, each with last_frame its index (which identifies it after compaction).
 SurfelMap NumberedMap(int n) {
   SurfelMap map;
   for (int i = 0; i < n; ++i) {
     Surfel s;
     s.position = s.normal = Eigen::Vector3f::Zero();
     s.confidence = 1;
-    s.first_frame = i;
+    s.last_frame = i;
     map.Add(s);
   }
   return map;
@@ -531,8 +531,8 @@ TEST(SurfelMap, CompactionCostsNothingForOldSurfelsBeforeTheFirstRemovedOne) {
   map.Remove(990);
   EXPECT_EQ(map.Compact(0.1), 990u);
   ASSERT_EQ(map.size(), 999u);
-  EXPECT_EQ(map[990].first_frame, 991);
-  EXPECT_EQ(map[989].first_frame, 989);
+  EXPECT_EQ(map[990].last_frame, 991);
+  EXPECT_EQ(map[989].last_frame, 989);
   // One removed near the start: a tiny share of what would move, so nothing moves yet...
   map.Remove(10);
   EXPECT_EQ(map.Compact(0.1), map.size());
@@ -543,8 +543,8 @@ TEST(SurfelMap, CompactionCostsNothingForOldSurfelsBeforeTheFirstRemovedOne) {
   EXPECT_EQ(map.Compact(0.1), 10u);
   ASSERT_EQ(map.size(), 898u);
   EXPECT_EQ(map.live(), 898u);
-  EXPECT_EQ(map[10].first_frame, 11);
-  EXPECT_EQ(map[99].first_frame, 200);
+  EXPECT_EQ(map[10].last_frame, 11);
+  EXPECT_EQ(map[99].last_frame, 200);
 }
 
 TEST(SurfelMap, KeepsOrderAcrossItsBlocksWhenItCompactsAndGrowsAgain) {
@@ -558,14 +558,14 @@ TEST(SurfelMap, KeepsOrderAcrossItsBlocksWhenItCompactsAndGrowsAgain) {
   for (int i = 0; i < 150000; ++i)
     if (i < 50000 || (i - 50000) % 3 != 0) expected.push_back(i);
   bool same = true;
-  for (size_t i = 0; i < map.size(); ++i) same &= map[i].first_frame == expected[i];
+  for (size_t i = 0; i < map.size(); ++i) same &= map[i].last_frame == expected[i];
   EXPECT_TRUE(same);
   const size_t bytes = map.MemoryBytes();
   // It grows again into the blocks it kept, then into a new one.
   for (int i = 0; i < 100000; ++i) map.Add(map[i]);
   EXPECT_EQ(map.size(), expected.size() + 100000u);
-  EXPECT_EQ(map[expected.size()].first_frame, 0);
-  EXPECT_EQ(map[map.size() - 1].first_frame, expected[99999]);
+  EXPECT_EQ(map[expected.size()].last_frame, 0);
+  EXPECT_EQ(map[map.size() - 1].last_frame, expected[99999]);
   EXPECT_GT(map.MemoryBytes(), bytes);
   EXPECT_EQ(map.ToVector().size(), map.size());
 }

@@ -91,7 +91,8 @@ void SurfelFusion::ProjectEntries(const SE3& camera_from_world) {
                 p2 = camera_.distortion[3], k3 = camera_.distortion[4];
     const float near = static_cast<float>(options_.min_depth_m * 0.5);
     const double stable_confidence = options_.stable_confidence,
-                 fill_stable_confidence = options_.fill_stable_confidence;
+                 fill_stable_confidence = options_.fill_stable_confidence,
+                 glass_stable_confidence = options_.glass.stable_confidence;
     // Unstable surfels last updated before these frames go stale at this step's cleanup unless a
     // pixel updates them (CleanUp's stale test, for a time step's frame_).
     const int sensor_stale_before = frame_ - options_.unstable_frames,
@@ -112,9 +113,13 @@ void SurfelFusion::ProjectEntries(const SE3& camera_from_world) {
         if (s.removed()) continue;
         // IsStable, with the thresholds in locals.
         const bool sensor = s.source == static_cast<uint8_t>(DepthSource::kSensor);
+        const bool transparent = s.source == static_cast<uint8_t>(DepthSource::kTransparent);
         const bool stable =
-            sensor ? s.confidence >= stable_confidence : s.confidence >= fill_stable_confidence;
-        if (!stable && s.last_frame < (sensor ? sensor_stale_before : fill_stale_before))
+            s.confidence >= (sensor        ? stable_confidence
+                             : transparent ? glass_stable_confidence
+                                           : fill_stable_confidence);
+        if (!stable &&
+            s.last_frame < (sensor || transparent ? sensor_stale_before : fill_stale_before))
           flags[e] = kMayGoStale;
         normal_radius[e] << s.normal, s.radius;
         const Eigen::Vector3f q = r * s.position + t;
@@ -200,9 +205,7 @@ void SurfelFusion::ForEachSplatPixel(const SE3& world_from_camera, Visit visit) 
       // fill surfel's normal is a median 33 degrees off the nearest sensor surfel's within 1 cm,
       // a sensor surfel's 2 degrees), and a disc tilted that far covers a sliver of its pixels.
       const Eigen::Vector3f normal = r * s.normal;
-      const Eigen::Vector3f n = s.source == static_cast<uint8_t>(DepthSource::kSensor)
-                                    ? normal
-                                    : Eigen::Vector3f(-q.normalized());
+      const Eigen::Vector3f n = IsFillSource(s.source) ? Eigen::Vector3f(-q.normalized()) : normal;
       if (q.z() < options_.min_depth_m) continue;
       const float n_dot_q = n.dot(q);
       const Eigen::Vector2d uv = camera_.ProjectDistorted(q.cast<double>());

@@ -42,8 +42,14 @@ SurfelImage RenderSurfels(const std::vector<Surfel>& surfels, const Camera& came
       const Eigen::Vector3d n = r * s.normal.cast<double>();
       shade = 0.35 + 0.65 * std::abs(n.dot(q.normalized()));
     }
-    auto channel = [&](uint8_t c) { return static_cast<uint8_t>(c * shade + 0.5); };
-    const cv::Vec3b color(channel(s.blue), channel(s.green), channel(s.red));
+    const bool glass = s.source == static_cast<uint8_t>(DepthSource::kTransparent);
+    // (glass: half the surfel's colour, half the tint's channel t)
+    auto channel = [&](uint8_t c, uint8_t t) {
+      return static_cast<uint8_t>((glass ? 0.5 * (c + t) : c) * shade + 0.5);
+    };
+    const cv::Vec3b& tint = options.glass_tint;
+    const cv::Vec3b color(channel(s.blue, tint[0]), channel(s.green, tint[1]),
+                          channel(s.red, tint[2]));
     const float z = static_cast<float>(q.z());
     for (int dy = -radius; dy <= radius; ++dy)
       for (int dx = -radius; dx <= radius; ++dx) {

@@ -3,8 +3,9 @@
 // predicted pose).
 //
 // Each surfel covers the pixels within its radius (r f / z pixels) around its projection, nearest
-// depth first; colour is the surfel's own, optionally shaded by how squarely its normal faces the
-// camera (so that shapes read in a picture).
+// depth first; colour is the surfel's own (a transparent surfel's, the colour seen through it,
+// blended with glass_tint), optionally shaded by how squarely its normal faces the camera (so that
+// shapes read in a picture).
 //
 // No threads, no I/O. Usage:
 //   gf::SurfelImage image = gf::RenderSurfels(surfels, camera, world_from_camera, {});
@@ -25,6 +26,9 @@ struct RenderOptions {
   int max_splat_px = 8;                 // largest disc radius drawn, pixels
   double min_depth_m = 0.1;             // nearer surfels are not drawn
   cv::Vec3b background{255, 255, 255};  // BGR where nothing is drawn
+  // Transparent surfels (DepthSource::kTransparent, clear glass) are drawn half their own colour,
+  // half this BGR colour (cyan), so that the glass shows as glass.
+  cv::Vec3b glass_tint{255, 200, 0};
   bool Check(std::string* message = nullptr) const;
 };
 

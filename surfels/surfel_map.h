@@ -2,9 +2,10 @@
 // each fused from every measurement that saw it.
 //
 // A surfel keeps its position and normal in the world frame, its radius, colour, confidence (the
-// accumulated weight of the measurements fused into it), the frames that created and last updated
-// it, the keyframe it belongs to (to move it with a pose correction) and its source: the sensor, a
-// stereo fill, or a fill carried from other keyframes (acquisition/depth.h's DepthSource). A
+// accumulated weight of the measurements fused into it), the frame that last updated it, the
+// sensor readings that landed on it and saw through it, the keyframe it belongs to (to move it
+// with a pose correction) and its source: the sensor, a stereo fill, a fill carried from other
+// keyframes, or a transparent surface (acquisition/depth.h's DepthSource). A
 // surfel is stable once its confidence reaches the threshold of its source (fusion.h); unstable
 // surfels are candidates that more measurements must confirm.
 //
@@ -31,7 +32,11 @@ struct Surfel {
   Eigen::Vector3f normal;    // world frame, unit, facing the cameras that saw it
   float radius = 0;          // metres
   float confidence = 0;      // accumulated measurement weight; < 0: removed
-  int32_t first_frame = 0;   // frame (fusion step) that created it
+  // Sensor pixels around it, over the frames that saw it, whose depth landed on it (within the
+  // free-space margin) and that saw through it (farther by more): what tells clear glass, which
+  // the sensor both reads and sees through, from an opaque surface (FusionOptions::glass).
+  // Both halve together before either overflows.
+  uint16_t readings_on = 0, readings_through = 0;
   int32_t last_frame = 0;    // ... that last updated it
   int32_t keyframe = -1;     // the keyframe it belongs to (-1: none yet)
   uint8_t red = 0, green = 0, blue = 0;
@@ -39,6 +44,13 @@ struct Surfel {
   bool removed() const { return confidence < 0; }
 };
 static_assert(sizeof(Surfel) <= 48, "a surfel should stay within 48 bytes");
+
+// A surfel of a fill (stereo, COLMAP or carried), not of the sensor's own readings.
+inline bool IsFillSource(uint8_t source) {
+  return source == static_cast<uint8_t>(DepthSource::kStereo) ||
+         source == static_cast<uint8_t>(DepthSource::kColmap) ||
+         source == static_cast<uint8_t>(DepthSource::kCarried);
+}
 
 // Averages a measurement of weight `weight` into s's position, normal and colour, weighted by s's
 // confidence and that weight (s's radius and confidence are the caller's).

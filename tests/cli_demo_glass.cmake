@@ -1,8 +1,9 @@
 # `glassfusion demo` end to end on the built-in glass scene (no datasets needed): the report is
 # written with the comparison of both maps, the stereo fill reaches the glossy, dark and glass
-# holes, almost no filled clear-glass pixel takes the glass's own depth instead of the background
-# seen through it (the goal is none; at most 1%: the sensor itself reads the glass surface on about
-# a fifth of the clear-glass pixels around those holes), and headless Chromium renders report.html
+# holes, almost no filled clear-glass pixel that the map does not mark as glass takes the glass's
+# own depth instead of the background seen through it (the goal is none; at most 1%: the sensor
+# itself reads the glass surface on about a fifth of the clear-glass pixels around those holes;
+# where the map marks glass, its transparent surfels give the glass's depth on purpose), and headless Chromium renders report.html
 # with every image loaded, its plots and its tables.
 set(work "${CMAKE_CURRENT_BINARY_DIR}/cli_demo_glass_tmp")
 file(REMOVE_RECURSE "${work}")
