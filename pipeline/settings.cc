@@ -58,6 +58,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing
                                    correct_own_fills)
 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(GlassOptions, enabled, min_readings_on, min_through_share,
+                                   edge_margin_px,
                                    stable_confidence)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixel_step,
                                    fill_pixel_step, max_depth_gap_m, max_normal_angle_deg,

@@ -23,6 +23,7 @@ bool GlassOptions::Check(std::string* message) const {
   FieldCheck c(message);
   c.In("min_readings_on", min_readings_on, 1, 30000, "is more than a surfel's count holds")
       .In("min_through_share", min_through_share, 0, 1, kMoreThanOne)
+      .In("edge_margin_px", edge_margin_px, 1, 64, "is wider than a depth edge moves")
       .Above("stable_confidence", stable_confidence, 0, kMaxCaptureFrames,
              kMoreFramesThanACapture);
   return c.ok();

@@ -87,6 +87,11 @@ struct GlassOptions {
   // Of the readings that landed on it or passed it, the share that passed it, 0-1: more than the
   // fifth an outline can give (with a pixel of pose error on top).
   double min_through_share = 1.0 / 3;
+  // How far a depth edge of the sensor moves between views, pixels (edge noise and a pixel or two
+  // of pose error): a reading counts as through only when the readings this far beside it, in all
+  // eight directions (rows, columns, diagonals), pass the surfel too. An opaque outline lies within this distance on one side; a
+  // glass surface seen through extends past it.
+  int edge_margin_px = 3;
   // A transparent surfel is stable from this confidence (the weight of the sensor's readings that
   // merged into it; a head-on view adds up to 1): clear glass returns a reading on a fraction of
   // its pixels, so it reaches the sensor's stable_confidence many times later than a wall.

@@ -65,6 +65,24 @@ void SurfelFusion::CompactMap() {
 
 namespace {
 
+// Whether the readings edge_px away from (x, y) along the rows, columns and diagonals (eight
+// directions, so that an outline's corner is not missed) that lie in the image and have a reading
+// are all farther than `beyond` (at least two of them).
+bool ThroughAround(const cv::Mat& depth, int x, int y, int edge_px, float beyond) {
+  static constexpr int kSides[8][2] = {{1, 0}, {-1, 0}, {0, 1},  {0, -1},
+                                       {1, 1}, {-1, 1}, {1, -1}, {-1, -1}};
+  int through = 0;
+  for (const auto& side : kSides) {
+    const int u = x + side[0] * edge_px, v = y + side[1] * edge_px;
+    if (u < 0 || v < 0 || u >= depth.cols || v >= depth.rows) continue;
+    const float d = depth.at<float>(v, u);
+    if (!(d > 0)) continue;
+    if (d <= beyond) return false;
+    ++through;
+  }
+  return through >= 2;
+}
+
 // Adds readings to a surfel's counts (halving the counts and the readings alike until they fit
 // 16 bits) and says whether it is transparent by them (GlassOptions).
 bool CountReadings(int on, int through, const GlassOptions& glass, Surfel* s) {
@@ -124,9 +142,12 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
           r.counted_on += counted && d >= z * near && d <= z * far;
           r.counted_through += counted && d > z * far;
         }
-      // Seen through across its disc, or not at all: where an opaque surface's outline crosses
-      // the five, some of them land on it.
-      if (r.counted_through < r.counted || r.counted < 3) r.counted_through = 0;
+      // Seen through across its disc and beyond where an edge could have moved, or not at all:
+      // where an opaque surface's outline lies near, some of those readings land on it or in
+      // front of it.
+      if (r.counted_through < r.counted || r.counted < 3 ||
+          !ThroughAround(m.depth, x, y, glass.edge_margin_px, z * far))
+        r.counted_through = 0;
       r.seen_through =
           !(entry_flags_[e] & kUpdated) && r.measured >= 5 && r.through == r.measured;
       // Entries are distinct surfels: each task writes its own.
