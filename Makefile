@@ -6,12 +6,15 @@ DEMO_OUT  ?= demo-out
 JOBS      ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-# Every Debian (bookworm) package the build, the tests and the measuring scripts need (chromium:
+# Every Debian (bookworm) package the build, the tests and the measuring scripts need (the ROS 1
+# bag library and message headers: RealSense .bag input; chromium:
 # the test that renders the demo report in a headless browser; slurm-wlm and munge: the test that
 # runs `batch --slurm` on a one-node cluster on loopback).
 DEB_PACKAGES := cmake make g++ pkg-config \
   libopencv-dev libeigen3-dev libceres-dev libpcl-dev \
   libopenni2-dev libfreenect-dev \
+  librosbag-storage-dev libroscpp-core-dev libsensor-msgs-dev libgeometry-msgs-dev \
+  libstd-msgs-dev \
   libcli11-dev nlohmann-json3-dev libspdlog-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
   python3-numpy python3-opencv python3-open3d \

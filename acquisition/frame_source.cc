@@ -13,6 +13,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/realsense_bag.h"
 #include "acquisition/tum_index.h"
 
 namespace fs = std::filesystem;
@@ -451,6 +452,7 @@ std::string DetectInputKind(const std::string& input) {
     return {};
   }
   if (IsRegularFile(input) && fs::path(input).extension() == ".oni") return "oni";
+  if (IsRegularFile(input) && fs::path(input).extension() == ".bag") return "realsense_bag";
   return {};
 }
 
@@ -476,13 +478,15 @@ std::unique_ptr<FrameSource> OpenFrameSource(const std::string& input,
   if (!fs::exists(input)) throw InputError(input, "no such file or folder");
   const std::string kind = DetectInputKind(input);
   if (kind == "oni") return OpenOpenNI2Source(input, options);
+  if (kind == "realsense_bag") return OpenRealSenseBag(input, options);
   if (kind == "tum") return OpenTumFolder(input, options);
   if (kind == "redwood") return OpenRedwoodFolder(input, options);
   if (kind == "fakenect" || kind == "kinect_raw") return OpenKinectRawFolder(input, options);
   throw InputError(input,
                    "unrecognised input: expected a TUM folder (rgb.txt, depth.txt), a Redwood "
                    "folder (image/ or color/, depth/), a raw Kinect folder (*.pgm, INDEX.txt), an "
-                   ".oni file or a device (dummy, openni2[:URI], freenect[:INDEX])");
+                   ".oni file, a RealSense .bag or a device (dummy, openni2[:URI], "
+                   "freenect[:INDEX])");
 }
 
 }  // namespace gf

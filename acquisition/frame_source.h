@@ -32,6 +32,10 @@ struct FrameSourceOptions {
   std::string camera_file;             // overrides <folder>/camera.json when not empty
   std::string depth_folder;            // Redwood: depth subfolder; empty = depth/ or depth_noisy/
   ShadowOptions shadows;               // projector-shadow classification of no-return holes
+  // RealSense .bag: the image topics to read where the bag holds several depth or colour
+  // streams (e.g. /device_0/sensor_0/Depth_0/image/data); empty = the only one there is.
+  std::string bag_depth_topic;
+  std::string bag_color_topic;
   bool Check(std::string* message = nullptr) const;
 };
 
@@ -151,11 +155,11 @@ class InMemoryFrameSource : public FrameSource {
 };
 
 // What kind of input a path is: "tum" (a folder with rgb.txt or depth.txt, even a broken one),
-// "redwood", "fakenect", "kinect_raw", "oni", or "" when unrecognised.
+// "redwood", "fakenect", "kinect_raw", "oni", "realsense_bag", or "" when unrecognised.
 std::string DetectInputKind(const std::string& input);
 
 // Opens any supported input, detected from what it is: a TUM, Redwood or raw Kinect folder, an .oni
-// recording, or a live device ("dummy" = OpenNI2's software device, "openni2[:URI]",
+// recording, a RealSense .bag (acquisition/realsense_bag.h), or a live device ("dummy" = OpenNI2's software device, "openni2[:URI]",
 // "freenect[:INDEX]"). Throws InputError naming the input when it is missing or of no known kind.
 std::unique_ptr<FrameSource> OpenFrameSource(const std::string& input,
                                              const FrameSourceOptions& options);

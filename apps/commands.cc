@@ -26,10 +26,14 @@ struct InputArgs {
   std::string input;
   std::string camera_file;
   std::string depth_folder;
+  std::string depth_topic;
+  std::string color_topic;
   FrameSourceOptions ToOptions() const {
     FrameSourceOptions o;
     o.camera_file = camera_file;
     o.depth_folder = depth_folder;
+    o.bag_depth_topic = depth_topic;
+    o.bag_color_topic = color_topic;
     return o;
   }
 };
@@ -37,11 +41,16 @@ struct InputArgs {
 void AddInputArgs(CLI::App* cmd, InputArgs* args) {
   cmd->add_option("INPUT", args->input,
                   "TUM folder, Redwood folder, raw Kinect folder (*.pgm / fakenect INDEX.txt), "
-                  ".oni file, or device: dummy, openni2[:URI], freenect[:INDEX]")
+                  ".oni file, RealSense .bag, or device: dummy, openni2[:URI], freenect[:INDEX]")
       ->required();
   cmd->add_option("--camera", args->camera_file, "camera.json to use instead of INPUT/camera.json");
   cmd->add_option("--depth-dir", args->depth_folder,
                   "Redwood: depth subfolder (default depth/, else depth_noisy/)");
+  cmd->add_option("--depth-topic", args->depth_topic,
+                  "RealSense .bag with several depth streams: the one to read, e.g. "
+                  "/device_0/sensor_0/Depth_0/image/data");
+  cmd->add_option("--color-topic", args->color_topic,
+                  "RealSense .bag with several colour streams: the one to read");
 }
 
 // --print-config: every setting as the JSON --config reads (with --config FILE applied when it

@@ -41,7 +41,8 @@ nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions op
     j["unmatched_depth"] = folder->unmatched_depth;
     j["unmatched_color"] = folder->unmatched_color;
   }
-  if (source->Kind() == "tum") j["duration_s"] = last_time - first_time;
+  if (source->Kind() == "tum" || source->Kind() == "realsense_bag")
+    j["duration_s"] = last_time - first_time;
   j["width"] = c.width;
   j["height"] = c.height;
   j["intrinsics"] = {{"fx", c.fx},
@@ -52,6 +53,18 @@ nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions op
   j["depth_convention"] = source->depth_convention().Name();
   j["depth_scale"] = cf.depth_scale;
   j["depth_registered_to_color"] = cf.depth_registered_to_color;
+  if (cf.depth_camera) {
+    // Depth registered to colour by the reader: the depth camera and where it sits.
+    const Camera& d = *cf.depth_camera;
+    const Eigen::Vector3d t = cf.color_from_depth.translation();
+    j["depth_camera"] = {{"width", d.width}, {"height", d.height}, {"fx", d.fx}, {"fy", d.fy},
+                         {"cx", d.cx},       {"cy", d.cy}};
+    j["color_from_depth"] = {
+        {"translation_m", {t.x(), t.y(), t.z()}},
+        {"rotation_deg",
+         cf.color_from_depth.rotation().angularDistance(Eigen::Quaterniond::Identity()) * 180 /
+             M_PI}};
+  }
   const double pixels = static_cast<double>(holes.pixels);
   j["hole_fraction"] = holes.Fraction();
   j["holes"] = {{"no_return", pixels ? holes.no_return / pixels : 0.0},
