@@ -57,7 +57,8 @@ std::string ChooseTopic(const std::string& path, const std::vector<std::string>&
                                (what == "depth" ? "Depth" : "Color") +
                                "_N/image/data): not a RealSense recording, or one without " + what);
   if (topics.size() > 1)
-    throw InputError(path, "several " + what + " streams (" + listed + "): choose one with " + flag);
+    throw InputError(path,
+                     "several " + what + " streams (" + listed + "): choose one with " + flag);
   return topics.front();
 }
 
@@ -175,10 +176,14 @@ cv::Mat ColorImage(const sensor_msgs::Image& image, const std::string& where) {
     int bytes, type, conversion;  // conversion -1: copy as it is
   };
   static const Encoding kEncodings[] = {
-      {"rgb8", 3, CV_8UC3, cv::COLOR_RGB2BGR},        {"bgr8", 3, CV_8UC3, -1},
-      {"rgba8", 4, CV_8UC4, cv::COLOR_RGBA2BGR},      {"bgra8", 4, CV_8UC4, cv::COLOR_BGRA2BGR},
-      {"yuyv", 2, CV_8UC2, cv::COLOR_YUV2BGR_YUYV},   {"yuv422", 2, CV_8UC2, cv::COLOR_YUV2BGR_UYVY},
-      {"uyvy", 2, CV_8UC2, cv::COLOR_YUV2BGR_UYVY},   {"mono8", 1, CV_8UC1, cv::COLOR_GRAY2BGR},
+      {"rgb8", 3, CV_8UC3, cv::COLOR_RGB2BGR},
+      {"bgr8", 3, CV_8UC3, -1},
+      {"rgba8", 4, CV_8UC4, cv::COLOR_RGBA2BGR},
+      {"bgra8", 4, CV_8UC4, cv::COLOR_BGRA2BGR},
+      {"yuyv", 2, CV_8UC2, cv::COLOR_YUV2BGR_YUYV},
+      {"yuv422", 2, CV_8UC2, cv::COLOR_YUV2BGR_UYVY},  // librealsense's name for UYVY
+      {"uyvy", 2, CV_8UC2, cv::COLOR_YUV2BGR_UYVY},
+      {"mono8", 1, CV_8UC1, cv::COLOR_GRAY2BGR},
       {"8uc1", 1, CV_8UC1, cv::COLOR_GRAY2BGR}};
   for (const Encoding& k : kEncodings) {
     if (e != k.name) continue;

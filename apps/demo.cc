@@ -119,7 +119,8 @@ void ScoreKeyframe(const std::string& scene_dir, const fs::path& keyframes, cons
                             ? cv::imread(glass_file.string(), cv::IMREAD_UNCHANGED)
                             : cv::Mat::zeros(label.size(), CV_8U);
   if (holes.empty() || label.empty() || glass.size() != label.size())
-    throw InputError(keyframes.string(), "keyframe " + ts + ": a mask or the label missing, or of another size");
+    throw InputError(keyframes.string(),
+                     "keyframe " + ts + ": a mask or the label missing, or of another size");
   const int clear_glass = static_cast<int>(synth::Material::kClearGlass);
   for (int v = 0; v < label.rows; ++v)
     for (int u = 0; u < label.cols; ++u) {

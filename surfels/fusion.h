@@ -66,12 +66,13 @@ inline constexpr long kMaxMapSurfels = kMaxMapBytes / static_cast<long>(sizeof(S
 
 // Clear glass in the map: a surface the sensor both reads and sees through. Over the frames that
 // see a sensor surfel, the sensor's readings at its pixel and the four next to it (the rays
-// through its disc) are counted: those whose depth lands on it (within free_space_margin) and
-// those that see through it (farther by more; Surfel::readings_on, readings_through). An opaque
-// surface in the right place is seen through only beyond its outline, by at most one of the five
-// (a fifth), and only while the pose is a pixel off; clear glass lets most of the light through (real D435 frames:
-// 44-86% of the readings on clear objects lie behind them, tests/glass_sensor_stats.py) and
-// returns the rest from its surface or not at all, in patches. So:
+// through its disc) are counted (Surfel::readings_on, readings_through): on it when their depth
+// lands on it (within free_space_margin); through it when all five lie farther by more, and so
+// do the readings edge_margin_px away in eight directions (an opaque outline, whose depth edge
+// moves a pixel or two between views, lies within that distance on one side). Clear glass lets
+// most of the light through (real D435 frames: 44-86% of the readings on clear objects lie
+// behind them, tests/glass_sensor_stats.py) and returns the rest from its surface or not at all,
+// in patches. So:
 //  - a surfel that views after the one that made it read at least min_readings_on times is not
 //    removed by one view that sees through it (it loses free_space_penalty, as a stable one);
 //  - a sensor surfel read at least min_readings_on times with at least min_through_share of its
@@ -84,13 +85,14 @@ struct GlassOptions {
   // Readings that landed on the surfel in the views after the one that made it, at least: more
   // than one view's five, so that a glass surface needs two views that read it.
   int min_readings_on = 6;
-  // Of the readings that landed on it or passed it, the share that passed it, 0-1: more than the
-  // fifth an outline can give (with a pixel of pose error on top).
+  // Of the readings that landed on it or passed it, the share that passed it, 0-1: glass is seen
+  // through on most of its pixels; an opaque surface only where a misplaced pose or a moving
+  // edge puts it, on a few views among many.
   double min_through_share = 1.0 / 3;
   // How far a depth edge of the sensor moves between views, pixels (edge noise and a pixel or two
-  // of pose error): a reading counts as through only when the readings this far beside it, in all
-  // eight directions (rows, columns, diagonals), pass the surfel too. An opaque outline lies within this distance on one side; a
-  // glass surface seen through extends past it.
+  // of pose error): a reading counts as through only when the readings this far beside it, in
+  // all eight directions (rows, columns, diagonals), pass the surfel too. An opaque outline lies
+  // within this distance on one side; a glass surface seen through extends past it.
   int edge_margin_px = 3;
   // A transparent surfel is stable from this confidence (the weight of the sensor's readings that
   // merged into it; a head-on view adds up to 1): clear glass returns a reading on a fraction of

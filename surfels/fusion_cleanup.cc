@@ -152,7 +152,8 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
           !(entry_flags_[e] & kUpdated) && r.measured >= 5 && r.through == r.measured;
       // Entries are distinct surfels: each task writes its own.
       Surfel& s = map_[visible_[e]];
-      if (glass.enabled && r.counted_on + r.counted_through > 0 && (s.source == sensor || s.source == transparent)) {
+      if (glass.enabled && r.counted_on + r.counted_through > 0 &&
+          (s.source == sensor || s.source == transparent)) {
         const uint8_t was = s.source;
         s.source = CountReadings(r.counted_on, r.counted_through, glass, &s) ? transparent : sensor;
         r.turned = s.source != was;
