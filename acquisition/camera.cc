@@ -40,23 +40,27 @@ double FieldOfViewDeg(int size, double focal, double centre) {
   return (std::atan((centre + 0.5) / focal) + std::atan((size - 0.5 - centre) / focal)) * kRadToDeg;
 }
 
-std::string DistortionText(const std::array<double, 5>& d) {
+std::string DistortionText(const std::vector<double>& d) {
   std::string text = "[";
   for (size_t i = 0; i < d.size(); ++i) text += (i ? ", " : "") + FormatNumber(d[i]);
   return text + "]";
 }
 
-// Empty when r_d(r) = r (1 + k1 r^2 + k2 r^4 + k3 r^6) grows from the axis until it reaches
-// corner_radius (the corners' distorted normalised radius), else why not.
-std::string RadialProblem(const std::array<double, 5>& d, double corner_radius) {
-  const double k1 = d[0], k2 = d[1], k3 = d[4];
+// Empty when r_d(r) = r radial(r^2) (LensModel) grows from the axis until it reaches corner_radius
+// (the corners' distorted normalised radius), else why not.
+std::string RadialProblem(const std::array<double, 8>& d, double corner_radius) {
+  const double k1 = d[0], k2 = d[1], k3 = d[4], k4 = d[5], k5 = d[6], k6 = d[7];
   // The farthest ray the model may need: kMaxFieldOfViewDeg / 2 off the axis.
   const double max_r = std::tan(kMaxFieldOfViewDeg / 2 / kRadToDeg);
   const double step = corner_radius / 1000;  // a thousandth of the way to the corners
   for (double r = 0; r <= max_r; r += step) {
     const double r2 = r * r;
-    if (r * (1 + r2 * (k1 + r2 * (k2 + r2 * k3))) >= corner_radius) return "";
-    const double slope = 1 + r2 * (3 * k1 + r2 * (5 * k2 + r2 * 7 * k3));
+    // r_d = r N / D; its slope is ((N + r N') D - N r D') / D^2, and D must stay positive.
+    const double n = 1 + r2 * (k1 + r2 * (k2 + r2 * k3)), d = 1 + r2 * (k4 + r2 * (k5 + r2 * k6));
+    const double n_slope = 1 + r2 * (3 * k1 + r2 * (5 * k2 + r2 * 7 * k3));  // N + r N'
+    const double r_d_prime = r2 * (2 * k4 + r2 * (4 * k5 + r2 * 6 * k6));     // r D'
+    if (d > 0 && r * n / d >= corner_radius) return "";
+    const double slope = d > 0 ? n_slope * d - n * r_d_prime : 0;
     if (!(slope > 0)) {
       char text[160];
       std::snprintf(text, sizeof(text),
@@ -108,7 +112,8 @@ bool Camera::CheckPlausible(std::string* message) const {
   if (!c.ok()) return false;
   const std::string radial = RadialProblem(distortion, corner_radius);
   c.Require(radial.empty(),
-            "distortion " + DistortionText(distortion) + ": its radial part " + radial);
+            "distortion " + DistortionText(DistortionCoefficients()) + ": its radial part " +
+                radial);
   return c.ok();
 }
 
@@ -116,6 +121,11 @@ bool Camera::HasDistortion() const {
   for (double d : distortion)
     if (d != 0.0) return true;
   return false;
+}
+
+std::vector<double> Camera::DistortionCoefficients() const {
+  const bool rational = distortion[5] != 0 || distortion[6] != 0 || distortion[7] != 0;
+  return std::vector<double>(distortion.begin(), distortion.begin() + (rational ? 8 : 5));
 }
 
 bool Camera::operator==(const Camera& o) const {
@@ -168,28 +178,22 @@ Eigen::Vector3d Camera::BackProject(const Eigen::Vector2d& pixel, double depth) 
 }
 
 Eigen::Vector2d Camera::Distort(const Eigen::Vector2d& n) const {
-  const double k1 = distortion[0], k2 = distortion[1], p1 = distortion[2], p2 = distortion[3],
-               k3 = distortion[4];
-  const double x = n.x(), y = n.y();
-  const double r2 = x * x + y * y;
-  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-  return {x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
-          y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y};
+  Eigen::Vector2d d;
+  LensModel<double>(distortion).Distort(n.x(), n.y(), &d.x(), &d.y());
+  return d;
 }
 
 Eigen::Vector2d Camera::Undistort(const Eigen::Vector2d& d) const {
   // Fixed-point iteration n <- (d - tangential(n)) / radial(n), as OpenCV does; converges quickly
   // for the mild distortion of depth cameras.
-  const double k1 = distortion[0], k2 = distortion[1], p1 = distortion[2], p2 = distortion[3],
-               k3 = distortion[4];
+  const LensModel<double> lens(distortion);
   Eigen::Vector2d n = d;
   for (int i = 0; i < 50; ++i) {
     const double x = n.x(), y = n.y();
     const double r2 = x * x + y * y;
-    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-    const double dx = 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
-    const double dy = p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
-    Eigen::Vector2d next((d.x() - dx) / radial, (d.y() - dy) / radial);
+    const double radial = lens.Radial(r2);
+    Eigen::Vector2d next((d.x() - lens.TangentialX(x, y, r2)) / radial,
+                         (d.y() - lens.TangentialY(x, y, r2)) / radial);
     if ((next - n).squaredNorm() < 1e-24) return next;
     n = next;
   }
@@ -210,8 +214,7 @@ Eigen::Matrix3d Camera::K() const {
 cv::Mat Camera::CvK() const { return (cv::Mat_<double>(3, 3) << fx, 0, cx, 0, fy, cy, 0, 0, 1); }
 
 cv::Mat Camera::CvDistortion() const {
-  return (cv::Mat_<double>(1, 5) << distortion[0], distortion[1], distortion[2], distortion[3],
-          distortion[4]);
+  return cv::Mat(1, 8, CV_64F, const_cast<double*>(distortion.data())).clone();
 }
 
 Camera Camera::Scaled(double factor) const {
@@ -285,7 +288,7 @@ Camera ParseIntrinsics(const nlohmann::json& j, const std::string& where, const 
   c.cx = Number(j, where, "cx", path);
   c.cy = Number(j, where, "cy", path);
   if (j.contains("distortion")) {
-    const std::vector<double> d = Numbers(j["distortion"], where + "distortion", 5, path);
+    const std::vector<double> d = Numbers(j["distortion"], where + "distortion", 8, path);
     std::copy(d.begin(), d.end(), c.distortion.begin());
   }
   if (!c.CheckPlausible(&problem)) throw InputError(path, where + problem);
@@ -300,7 +303,7 @@ nlohmann::ordered_json IntrinsicsJson(const Camera& c) {
   j["fy"] = c.fy;
   j["cx"] = c.cx;
   j["cy"] = c.cy;
-  j["distortion"] = std::vector<double>(c.distortion.begin(), c.distortion.end());
+  j["distortion"] = c.DistortionCoefficients();
   return j;
 }
 

@@ -1,4 +1,4 @@
-// Pinhole camera with OpenCV (Brown-Conrady) distortion, and the camera.json file format.
+// Pinhole camera with OpenCV's (Brown-Conrady, rational) distortion, and the camera.json format.
 //
 // Units: focal lengths and principal point in pixels, image size in pixels, points in metres.
 // Pixel convention: (0,0) is the centre of the top-left pixel (OpenCV, TUM, ICL-NUIM).
@@ -8,6 +8,8 @@
 //   { "width": 640, "height": 480, "fx": 525.0, "fy": 525.0, "cx": 319.5, "cy": 239.5,
 //     "distortion": [k1, k2, p1, p2, k3], "depth_scale": 5000.0,
 //     "depth_registered_to_color": true }
+// "distortion" holds up to 8 coefficients, OpenCV's order [k1, k2, p1, p2, k3, k4, k5, k6] (k4-k6:
+// the rational model's denominator, as the Azure Kinect's lenses need); missing ones are zero.
 // depth_scale is raw depth units per metre (PNG value / depth_scale = metres).
 // Sources whose depth is not registered to colour (raw Kinect v1 disparity, some OpenNI devices)
 // add the depth (IR) camera and the rigid transform between the two:
@@ -43,6 +45,29 @@ namespace gf {
 inline constexpr double kMinFieldOfViewDeg = 20;
 inline constexpr double kMaxFieldOfViewDeg = 170;
 
+// OpenCV's lens model (cv::projectPoints with 8 coefficients) in the caller's scalar type, for
+// loops that project many points in float. On normalised coordinates (x/z, y/z), r^2 = x^2 + y^2:
+//   radial = (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 + k6 r^6)
+//   x_d = x radial + 2 p1 x y + p2 (r^2 + 2 x^2),  y_d = y radial + p1 (r^2 + 2 y^2) + 2 p2 x y.
+// With k4 = k5 = k6 = 0 the denominator is exactly 1 and this is the 5-coefficient model.
+template <typename T>
+struct LensModel {
+  explicit LensModel(const std::array<double, 8>& d)
+      : k1(T(d[0])), k2(T(d[1])), p1(T(d[2])), p2(T(d[3])), k3(T(d[4])), k4(T(d[5])),
+        k5(T(d[6])), k6(T(d[7])) {}
+  T Radial(T r2) const {
+    return (T(1) + r2 * (k1 + r2 * (k2 + r2 * k3))) / (T(1) + r2 * (k4 + r2 * (k5 + r2 * k6)));
+  }
+  T TangentialX(T x, T y, T r2) const { return T(2) * p1 * x * y + p2 * (r2 + T(2) * x * x); }
+  T TangentialY(T x, T y, T r2) const { return p1 * (r2 + T(2) * y * y) + T(2) * p2 * x * y; }
+  void Distort(T x, T y, T* x_d, T* y_d) const {
+    const T r2 = x * x + y * y, radial = Radial(r2);
+    *x_d = x * radial + T(2) * p1 * x * y + p2 * (r2 + T(2) * x * x);
+    *y_d = y * radial + p1 * (r2 + T(2) * y * y) + T(2) * p2 * x * y;
+  }
+  T k1, k2, p1, p2, k3, k4, k5, k6;
+};
+
 struct Camera {
   int width = 640;    // image width, pixels
   int height = 480;   // image height, pixels
@@ -50,8 +75,9 @@ struct Camera {
   double fy = 525.0;  // focal length along y, pixels
   double cx = 319.5;  // principal point x, pixels
   double cy = 239.5;  // principal point y, pixels
-  // OpenCV distortion [k1, k2, p1, p2, k3], dimensionless; all zero = ideal pinhole.
-  std::array<double, 5> distortion{0, 0, 0, 0, 0};
+  // OpenCV distortion [k1, k2, p1, p2, k3, k4, k5, k6] (LensModel), dimensionless; all zero =
+  // ideal pinhole.
+  std::array<double, 8> distortion{0, 0, 0, 0, 0, 0, 0, 0};
 
   // Valid intrinsics: positive size and focal lengths, finite values. Message says what is wrong.
   bool Check(std::string* message = nullptr) const;
@@ -61,11 +87,14 @@ struct Camera {
   //  - the principal point inside the image;
   //  - a field of view of kMinFieldOfViewDeg to kMaxFieldOfViewDeg across the image each way
   //    (RGB-D sensors see 45-90 degrees; fx = 1e30 would see nothing, fx = 1 everything);
-  //  - a radial distortion r_d(r) = r (1 + k1 r^2 + k2 r^4 + k3 r^6) that grows with the
-  //    undistorted normalised radius r until it reaches the image's corners, so that every pixel
-  //    has one ray (the tangential terms are small and not tested).
+  //  - a radial distortion r_d(r) = r radial(r^2) (LensModel) that grows with the undistorted
+  //    normalised radius r until it reaches the image's corners, so that every pixel has one ray
+  //    (the tangential terms are small and not tested).
   bool CheckPlausible(std::string* message = nullptr) const;
   bool HasDistortion() const;
+  // The coefficients as camera.json, COLMAP and ROS write them: 5 (k1, k2, p1, p2, k3) when
+  // k4 = k5 = k6 = 0, else all 8.
+  std::vector<double> DistortionCoefficients() const;
 
   // Ideal pinhole projection (no distortion). point_in_camera.z() must be > 0.
   Eigen::Vector2d Project(const Eigen::Vector3d& point_in_camera) const;
@@ -91,7 +120,7 @@ struct Camera {
 
   Eigen::Matrix3d K() const;
   cv::Mat CvK() const;           // 3x3 CV_64F
-  cv::Mat CvDistortion() const;  // 1x5 CV_64F
+  cv::Mat CvDistortion() const;  // 1x8 CV_64F
   // cv::remap maps (fixed point, the fast kind) that undistort this camera's images onto the
   // ideal pinhole camera K with the same size. Computed once per camera and shared between calls:
   // read them, never write into them.

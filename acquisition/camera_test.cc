@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
 #include <random>
 
@@ -170,6 +171,8 @@ TEST(Camera, RealCamerasArePlausible) {
   EXPECT_TRUE(kinect.camera.CheckPlausible(&problem)) << problem;
   ASSERT_TRUE(kinect.depth_camera.has_value());
   EXPECT_TRUE(kinect.depth_camera->CheckPlausible(&problem)) << problem;
+  EXPECT_TRUE(testing::AzureKinectNfovDepthCamera().CheckPlausible(&problem)) << problem;
+  EXPECT_TRUE(testing::AzureKinect720pColorCamera().CheckPlausible(&problem)) << problem;
   int read = 0;
   for (const char* name :
        {"tum_fr1_xyz_head", "tum_fr1_xyz_mid", "icl_livingroom1_micro", "icl_livingroom1_noisy5"}) {
@@ -210,6 +213,48 @@ TEST(Camera, DistortedProjectionMatchesOpenCv) {
     EXPECT_NEAR(got.x(), expected[i].x, 1e-6);
     EXPECT_NEAR(got.y(), expected[i].y, 1e-6);
   }
+}
+
+// The rational model (k4-k6) of the Azure Kinect's lenses, as OpenCV projects it, and its inverse
+// over every part of the image.
+TEST(Camera, RationalModelMatchesOpenCvAndInvertsOverTheImage) {
+  for (const Camera& c :
+       {testing::AzureKinectNfovDepthCamera(), testing::AzureKinect720pColorCamera()}) {
+    std::vector<cv::Point3d> points;
+    for (double x = -0.7; x <= 0.7; x += 0.1)
+      for (double y = -0.6; y <= 0.6; y += 0.1) points.emplace_back(x * 2, y * 2, 2.0);
+    std::vector<cv::Point2d> expected;
+    cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), c.CvK(), c.CvDistortion(),
+                      expected);
+    for (size_t i = 0; i < points.size(); ++i) {
+      const Eigen::Vector2d got = c.ProjectDistorted({points[i].x, points[i].y, points[i].z});
+      EXPECT_NEAR(got.x(), expected[i].x, 1e-6);
+      EXPECT_NEAR(got.y(), expected[i].y, 1e-6);
+    }
+    // Every pixel's ray projects back onto it, corners included.
+    for (int v = 0; v < c.height; v += 16)
+      for (int u = 0; u < c.width; u += 16) {
+        const Eigen::Vector2d ray = c.UndistortPixel({u, v});
+        const Eigen::Vector2d back = c.ProjectDistorted({ray.x(), ray.y(), 1.0});
+        EXPECT_LT((back - Eigen::Vector2d(u, v)).norm(), 1e-6) << c.width << ": " << u << "," << v;
+      }
+  }
+}
+
+// camera.json keeps 8 coefficients when k4-k6 are not zero, and writes 5 when they are.
+TEST(Camera, JsonKeepsTheRationalModel) {
+  testing::TempDir dir;
+  CameraFile f;
+  f.camera = testing::AzureKinect720pColorCamera();
+  f.depth_scale = 1000.0;
+  SaveCameraFile(dir / "camera.json", f);
+  EXPECT_EQ(LoadCameraFile(dir / "camera.json").camera.distortion, f.camera.distortion);
+  f.camera = testing::TumFr1Camera();
+  SaveCameraFile(dir / "camera.json", f);
+  std::ifstream in(dir / "camera.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["distortion"].size(), 5u);
+  EXPECT_EQ(LoadCameraFile(dir / "camera.json").camera.distortion, f.camera.distortion);
 }
 
 TEST(Camera, UndistortInvertsDistortOverTheImage) {

@@ -85,12 +85,14 @@ Camera CameraFromInfo(const std::string& path, const std::string& topic,
       std::any_of(info.D.begin(), info.D.end(), [](double d) { return d != 0.0; });
   if (distorted) {
     // librealsense's "Brown Conrady" coefficients are OpenCV's k1, k2, p1, p2, k3; ROS calls the
-    // same model plumb_bob. The inverse and modified variants and the fisheye ones are not.
-    if (info.distortion_model != "Brown Conrady" && info.distortion_model != "plumb_bob")
+    // same model plumb_bob, and rational_polynomial adds k4-k6 (Camera::distortion). The inverse
+    // and modified variants and the fisheye ones are not OpenCV's model.
+    if (info.distortion_model != "Brown Conrady" && info.distortion_model != "plumb_bob" &&
+        info.distortion_model != "rational_polynomial")
       throw InputError(path, topic + ": lens distortion model \"" + info.distortion_model +
                                  "\" with non-zero coefficients is not supported (OpenCV's "
                                  "Brown-Conrady is); pass --camera FILE with the lens in it");
-    for (size_t i = 0; i < std::min<size_t>(5, info.D.size()); ++i) c.distortion[i] = info.D[i];
+    for (size_t i = 0; i < std::min<size_t>(8, info.D.size()); ++i) c.distortion[i] = info.D[i];
   }
   std::string problem;
   if (!c.CheckPlausible(&problem)) throw InputError(path, topic + ": " + problem);

@@ -49,7 +49,7 @@ nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions op
                      {"fy", c.fy},
                      {"cx", c.cx},
                      {"cy", c.cy},
-                     {"distortion", std::vector<double>(c.distortion.begin(), c.distortion.end())}};
+                     {"distortion", c.DistortionCoefficients()}};
   j["depth_convention"] = source->depth_convention().Name();
   j["depth_scale"] = cf.depth_scale;
   j["depth_registered_to_color"] = cf.depth_registered_to_color;

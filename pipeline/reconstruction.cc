@@ -230,7 +230,7 @@ std::unique_ptr<Reconstruction::Stages> Reconstruction::MakeStages(FrameSource& 
     loop_options.same_place = options_.tracker.keyframes;
     // On the images tracking works on: undistorted (FrameToKeyframeTracker).
     Camera pinhole = source.camera();
-    pinhole.distortion = {0, 0, 0, 0, 0};
+    pinhole.distortion = {};
     s->loop = std::make_unique<LoopClosureStage>(pinhole, loop_options, &s->corrections);
   }
   s->queue = std::make_unique<BoundedQueue<FrameItem>>(options_.queue_capacity);

@@ -233,7 +233,7 @@ void FolderRunSink::WriteCamera(const CameraFile& camera) {
   undistort_x_ = undistort_y_ = cv::Mat();
   if (camera.camera.HasDistortion()) camera.camera.UndistortionMaps(&undistort_x_, &undistort_y_);
   CameraFile pinhole = camera;
-  pinhole.camera.distortion = {0, 0, 0, 0, 0};
+  pinhole.camera.distortion = {};
   SaveCameraFile(File("undistorted/camera.json"), pinhole);
   const Camera& c = pinhole.camera;
   const nlohmann::ordered_json open3d = {

@@ -92,7 +92,7 @@ FrameToKeyframeTracker::FrameToKeyframeTracker(const Camera& camera, const Track
       options_(options) {
   std::string problem;
   GF_CHECK(options_.Check(&problem), problem);
-  pinhole_.distortion = {0, 0, 0, 0, 0};
+  pinhole_.distortion = {};
   if (camera.HasDistortion()) camera.UndistortionMaps(&undistort_x_, &undistort_y_);
 }
 

@@ -125,7 +125,7 @@ TEST(FrameToKeyframeTracker, LeavesTheCallersFrameAsItWas) {
   options.frames = 2;
   const std::vector<SE3> poses = synth::MakeTrajectory(scene, options);
   Camera camera = synth::SynthCamera();
-  camera.distortion = {0.26, -0.95, -0.005, 0.003, 1.16};  // TUM fr1's lens
+  camera.distortion = {0.26, -0.95, -0.005, 0.003, 1.16, 0, 0, 0};  // TUM fr1's lens
   FrameToKeyframeTracker tracker(camera, GlobalShutter());
   for (int i = 0; i < 2; ++i) {
     const RgbdFrame frame = SynthDepthFrame(scene, poses[i], i);

@@ -38,9 +38,10 @@ void WriteColmapTextModel(const std::string& sparse_dir, const Camera& camera,
   char line[512];
   const auto& d = camera.distortion;
   std::snprintf(line, sizeof(line),
-                "1 FULL_OPENCV %d %d %.10g %.10g %.10g %.10g %.10g %.10g %.10g %.10g %.10g 0 0 0\n",
+                "1 FULL_OPENCV %d %d %.10g %.10g %.10g %.10g %.10g %.10g %.10g %.10g %.10g %.10g %.10g "
+                "%.10g\n",
                 camera.width, camera.height, camera.fx, camera.fy, camera.cx, camera.cy, d[0], d[1],
-                d[2], d[3], d[4]);
+                d[2], d[3], d[4], d[5], d[6], d[7]);
   WriteTextFileAtomically((fs::path(sparse_dir) / "cameras.txt").string(),
                           "# Camera list with one line of data per camera:\n"
                           "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
@@ -96,9 +97,8 @@ std::map<int, Camera> ReadColmapCameras(const std::string& path) {
       c.fy = p[1];
       c.cx = p[2];
       c.cy = p[3];
-      if (model != "PINHOLE") c.distortion = {p[4], p[5], p[6], p[7], model == "OPENCV" ? 0 : p[8]};
-      if (model == "FULL_OPENCV" && (p[9] != 0 || p[10] != 0 || p[11] != 0))
-        throw InputError(where, "FULL_OPENCV with k4..k6 (rational model) is not supported");
+      if (model == "OPENCV") c.distortion = {p[4], p[5], p[6], p[7], 0, 0, 0, 0};
+      if (model == "FULL_OPENCV") c.distortion = {p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11]};
     } else {
       throw InputError(where, "unsupported camera model " + model);
     }

@@ -88,22 +88,17 @@ std::vector<float> ProjectIntoHoles(const cv::Mat& hole_mask, const SE3& world_f
   const Eigen::Matrix3f rotation = key1_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f translation = key1_from_world.translation().cast<float>();
   // Camera::ProjectDistorted in float, inlined: this loop projects every earlier fill point.
-  const float k1 = static_cast<float>(camera.distortion[0]),
-              k2 = static_cast<float>(camera.distortion[1]),
-              p1 = static_cast<float>(camera.distortion[2]),
-              p2 = static_cast<float>(camera.distortion[3]),
-              k3 = static_cast<float>(camera.distortion[4]);
+  const LensModel<float> lens(camera.distortion);
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy),
               cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
   for (size_t k = 0; k < n; ++k) {
     for (const Eigen::Vector3f& world : views[k]->world_points) {
       const Eigen::Vector3f p = rotation * world + translation;
       if (!(p.z() > 0)) continue;
-      const float x = p.x() / p.z(), y = p.y() / p.z(), r2 = x * x + y * y;
-      const float radial = 1.f + r2 * (k1 + r2 * (k2 + r2 * k3));
+      float x, y;
+      lens.Distort(p.x() / p.z(), p.y() / p.z(), &x, &y);
       // + 0.5 in cx, cy: truncating a value >= 0 then rounds to the nearest pixel.
-      const float u = fx * (x * radial + 2.f * p1 * x * y + p2 * (r2 + 2.f * x * x)) + cx;
-      const float v = fy * (y * radial + p1 * (r2 + 2.f * y * y) + 2.f * p2 * x * y) + cy;
+      const float u = fx * x + cx, v = fy * y + cy;
       if (!(u >= 0 && v >= 0 && u < slot.cols && v < slot.rows)) continue;
       const int s = slot.at<int>(static_cast<int>(v), static_cast<int>(u));
       if (s < 0) continue;

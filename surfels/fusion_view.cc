@@ -87,8 +87,7 @@ void SurfelFusion::ProjectEntries(const SE3& camera_from_world) {
     const Eigen::Vector3f t = translation;
     const int width = camera_.width, height = camera_.height;
     const float fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
-    const float k1 = camera_.distortion[0], k2 = camera_.distortion[1], p1 = camera_.distortion[2],
-                p2 = camera_.distortion[3], k3 = camera_.distortion[4];
+    const LensModel<float> lens(camera_.distortion);
     const float near = static_cast<float>(options_.min_depth_m * 0.5);
     const double stable_confidence = options_.stable_confidence,
                  fill_stable_confidence = options_.fill_stable_confidence,
@@ -126,10 +125,9 @@ void SurfelFusion::ProjectEntries(const SE3& camera_from_world) {
         in_camera[e] = q;
         if (q.z() < near) continue;
         const float to_plane = 1.f / q.z();
-        const float a = q.x() * to_plane, b = q.y() * to_plane, r2 = a * a + b * b;
-        const float radial = 1.f + r2 * (k1 + r2 * (k2 + r2 * k3));
-        const float u = fx * (a * radial + 2.f * p1 * a * b + p2 * (r2 + 2.f * a * a)) + cx;
-        const float v = fy * (b * radial + p1 * (r2 + 2.f * b * b) + 2.f * p2 * a * b) + cy;
+        float a, b;
+        lens.Distort(q.x() * to_plane, q.y() * to_plane, &a, &b);
+        const float u = fx * a + cx, v = fy * b + cy;
         // Nearest pixel (truncating u + 0.5 rounds it for u >= -0.5; std::lround and std::floor
         // are library calls on baseline x86-64, and this loop runs per surfel in view).
         // The upper bounds keep the conversion defined (a surfel near the camera and far outside

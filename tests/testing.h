@@ -19,7 +19,36 @@ inline Camera TumFr1Camera() {
   c.fy = 516.5;
   c.cx = 318.6;
   c.cy = 255.3;
-  c.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
+  c.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633, 0, 0, 0};
+  return c;
+}
+
+// The depth camera of an Azure Kinect DK in NFOV_UNBINNED mode (640x576; the calibration of
+// pyk4a's test recording, tests/data/azure_kinect): OpenCV's rational model, strong barrel
+// distortion (k1 0.55 over k4 0.89).
+inline Camera AzureKinectNfovDepthCamera() {
+  Camera c;
+  c.width = 640;
+  c.height = 576;
+  c.fx = 504.6076;
+  c.fy = 504.7325;
+  c.cx = 332.7811;
+  c.cy = 348.8297;
+  c.distortion = {0.54794, -0.0209714, 2.05575e-05, -7.21042e-05,
+                  -0.00265223, 0.889679, 0.0861302, -0.0139104};
+  return c;
+}
+
+// The colour camera of the same device in 720p mode (1280x720).
+inline Camera AzureKinect720pColorCamera() {
+  Camera c;
+  c.width = 1280;
+  c.height = 720;
+  c.fx = 611.7953;
+  c.fy = 611.9270;
+  c.cx = 639.3043;
+  c.cy = 365.8529;
+  c.distortion = {0.330121, -2.4894, -0.000161782, -0.000129445, 1.45367, 0.208912, -2.30292, 1.37513};
   return c;
 }
 

@@ -38,7 +38,7 @@ int Convert(const std::string& folder, const std::string& out, size_t frames) {
   info.width = cf.camera.width, info.height = cf.camera.height;
   info.K = {cf.camera.fx, 0, cf.camera.cx, 0, cf.camera.fy, cf.camera.cy, 0, 0, 1};
   info.distortion_model = "Brown Conrady";
-  info.D.assign(cf.camera.distortion.begin(), cf.camera.distortion.end());
+  info.D = cf.camera.DistortionCoefficients();
   rosbag::Bag bag(out, rosbag::bagmode::Write);
   bag.setCompression(rosbag::compression::LZ4);
   const ros::Time first(0, 1);
