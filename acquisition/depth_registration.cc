@@ -27,12 +27,29 @@ void RegisterDepthToColor(const cv::Mat& depth_m, const cv::Mat& hole_mask,
   // Footprint of one depth pixel in colour pixels, at equal depth.
   const double scale_x = color_camera.fx / depth_camera.fx,
                scale_y = color_camera.fy / depth_camera.fy;
+  // With lens distortion: each pixel's ray, and a pixel's size where it lies (a wide lens's
+  // pixels cover more of the scene towards the edges).
+  const bool distorted = depth_camera.HasDistortion() || color_camera.HasDistortion();
+  const UndistortedPixels rays(depth_camera);
+  auto footprint = [&](int u, int v, const Eigen::Vector2d& ray) -> Eigen::Vector2d {
+    if (!distorted) return {scale_x, scale_y};
+    const int du = u + 1 < depth_camera.width ? 1 : -1, dv = v + 1 < depth_camera.height ? 1 : -1;
+    return {color_camera.fx * std::abs(rays.Ray(u + du, v).x() - ray.x()),
+            color_camera.fy * std::abs(rays.Ray(u, v + dv).y() - ray.y())};
+  };
 
   auto splat = [&](int u, int v, double z, uint8_t hole_code, bool is_depth) {
-    const Eigen::Vector3d p = R * depth_camera.BackProject({u, v}, z) + t;
+    Eigen::Vector3d p;
+    if (distorted) {
+      const Eigen::Vector2d ray = rays.Ray(u, v);
+      p = R * Eigen::Vector3d(ray.x() * z, ray.y() * z, z) + t;
+    } else {
+      p = R * depth_camera.BackProject({u, v}, z) + t;
+    }
     if (p.z() <= 0) return;
-    const Eigen::Vector2d c = color_camera.Project(p);
-    const double half_x = 0.5 * scale_x * z / p.z(), half_y = 0.5 * scale_y * z / p.z();
+    const Eigen::Vector2d c = distorted ? color_camera.ProjectDistorted(p) : color_camera.Project(p);
+    const Eigen::Vector2d size = footprint(u, v, distorted ? rays.Ray(u, v) : Eigen::Vector2d());
+    const double half_x = 0.5 * size.x() * z / p.z(), half_y = 0.5 * size.y() * z / p.z();
     const int x0 = std::max(0, static_cast<int>(std::ceil(c.x() - half_x - 0.5)));
     const int x1 = std::min(w - 1, static_cast<int>(std::floor(c.x() + half_x + 0.5)));
     const int y0 = std::max(0, static_cast<int>(std::ceil(c.y() - half_y - 0.5)));

@@ -24,7 +24,8 @@ namespace gf {
 
 // depth_m: CV_32FC1 metres (0 = hole) in the depth camera; hole_mask: CV_8UC1 HoleCode, same size.
 // Outputs are colour-camera sized: registered_depth CV_32FC1, registered_holes CV_8UC1.
-// Distortion of either camera is ignored (the Kinect v1's is below a pixel over most of the image).
+// Both cameras' lens distortion is applied (a depth pixel's ray through the depth lens, its point
+// through the colour lens; the footprint is the pixel's size where it lies on the image).
 void RegisterDepthToColor(const cv::Mat& depth_m, const cv::Mat& hole_mask,
                           const Camera& depth_camera, const Camera& color_camera,
                           const SE3& color_from_depth, cv::Mat* registered_depth,

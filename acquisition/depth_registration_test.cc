@@ -3,12 +3,59 @@
 #include <gtest/gtest.h>
 
 #include "acquisition/depth.h"
+#include "tests/testing.h"
 
 namespace gf {
 namespace {
 
-// A tilted plane n . p = d seen by an IR camera 2.5 cm to the side of a colour camera with other
-// intrinsics: registration must reproduce the plane's depth as the colour camera sees it.
+// A tilted plane n . p = d seen by a depth camera beside a colour camera with other intrinsics:
+// registration must reproduce the plane's depth as the colour camera sees it, with no cracks
+// inside the depth camera's view. Returns the colour pixels checked.
+int ExpectThePlaneWhereTheColourCameraSeesIt(const Camera& ir, const Camera& color,
+                                             const SE3& color_from_depth, double max_error_m) {
+  // Plane in the colour camera's frame: z = 2.0 + 0.3 x + 0.1 y.
+  const Eigen::Vector3d n_color = Eigen::Vector3d(-0.3, -0.1, 1.0);
+  const double d_color = 2.0;
+  auto plane_depth = [&](const Camera& cam, const SE3& world_from_cam, double u, double v) {
+    // Ray p = t * r in cam; plane in colour frame: n . (R p + t0) = d.
+    const Eigen::Vector2d n = cam.UndistortPixel({u, v});
+    const Eigen::Vector3d rw = world_from_cam.RotationMatrix() * Eigen::Vector3d(n.x(), n.y(), 1);
+    return (d_color - n_color.dot(world_from_cam.translation())) / n_color.dot(rw);  // z in cam
+  };
+  cv::Mat depth(ir.height, ir.width, CV_32FC1);
+  for (int v = 0; v < ir.height; ++v)
+    for (int u = 0; u < ir.width; ++u)
+      depth.at<float>(v, u) = static_cast<float>(plane_depth(ir, color_from_depth, u, v));
+  cv::Mat holes(ir.height, ir.width, CV_8UC1, cv::Scalar(0));
+  cv::Mat reg_depth, reg_holes;
+  RegisterDepthToColor(depth, holes, ir, color, color_from_depth, &reg_depth, &reg_holes);
+
+  // Check the colour pixels whose plane point the IR camera sees.
+  const SE3 depth_from_color = color_from_depth.Inverse();
+  int covered = 0, checked = 0;
+  double max_error = 0;
+  for (int v = 0; v < color.height; ++v) {
+    for (int u = 0; u < color.width; ++u) {
+      const double z_color = plane_depth(color, SE3(), u, v);
+      const Eigen::Vector2d n = color.UndistortPixel({u, v});
+      const Eigen::Vector2d in_ir = ir.ProjectDistorted(
+          depth_from_color * Eigen::Vector3d(n.x() * z_color, n.y() * z_color, z_color));
+      if (in_ir.x() < 1 || in_ir.y() < 1 || in_ir.x() > ir.width - 2 ||
+          in_ir.y() > ir.height - 2)
+        continue;
+      ++checked;
+      const float z = reg_depth.at<float>(v, u);
+      if (z <= 0) continue;
+      ++covered;
+      max_error = std::max(max_error, std::abs(z - z_color));
+    }
+  }
+  EXPECT_GT(covered, 0.995 * checked);
+  EXPECT_LT(max_error, max_error_m);
+  return checked;
+}
+
+// A Kinect-like pair: pinhole cameras 2.5 cm apart, the IR camera's view narrower (fx 580).
 TEST(RegisterDepthToColor, TiltedPlaneLandsWhereTheColourCameraSeesIt) {
   Camera ir;
   ir.fx = ir.fy = 580.0;
@@ -20,47 +67,22 @@ TEST(RegisterDepthToColor, TiltedPlaneLandsWhereTheColourCameraSeesIt) {
   color.cy = 239.5;
   const SE3 color_from_depth(Eigen::Quaterniond(Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitY())),
                              Eigen::Vector3d(-0.025, 0.001, 0.002));
-  // Plane in the colour camera's frame: z = 2.0 + 0.3 x + 0.1 y.
-  const Eigen::Vector3d n_color = Eigen::Vector3d(-0.3, -0.1, 1.0);
-  const double d_color = 2.0;
-  auto plane_depth = [&](const Camera& cam, const SE3& world_from_cam, double u, double v) {
-    // Ray p = t * r in cam; plane in colour frame: n . (R p + t0) = d.
-    const Eigen::Vector3d r((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
-    const Eigen::Vector3d rw = world_from_cam.RotationMatrix() * r;
-    const double t = (d_color - n_color.dot(world_from_cam.translation())) / n_color.dot(rw);
-    return t;  // z in cam, since r.z = 1
-  };
-  cv::Mat depth(480, 640, CV_32FC1);
-  for (int v = 0; v < 480; ++v)
-    for (int u = 0; u < 640; ++u)
-      depth.at<float>(v, u) = static_cast<float>(plane_depth(ir, color_from_depth, u, v));
-  cv::Mat holes(480, 640, CV_8UC1, cv::Scalar(0));
-  cv::Mat reg_depth, reg_holes;
-  RegisterDepthToColor(depth, holes, ir, color, color_from_depth, &reg_depth, &reg_holes);
+  // The nearest-surface splat is within the depth change across its footprint (slope 0.3 at
+  // 2.6 m: about 1.4 mm per IR pixel, so under 3 mm).
+  EXPECT_GT(ExpectThePlaneWhereTheColourCameraSeesIt(ir, color, color_from_depth, 0.003), 200000);
+}
 
-  // Check the colour pixels whose plane point the IR camera sees (its view is narrower: fx 580).
-  const SE3 depth_from_color = color_from_depth.Inverse();
-  int covered = 0, checked = 0;
-  double max_error = 0;
-  for (int v = 0; v < 480; ++v) {
-    for (int u = 0; u < 640; ++u) {
-      const double z_color = plane_depth(color, SE3(), u, v);
-      const Eigen::Vector2d in_ir =
-          ir.Project(depth_from_color * color.BackProject({u, v}, z_color));
-      if (in_ir.x() < 1 || in_ir.y() < 1 || in_ir.x() > 638 || in_ir.y() > 478) continue;
-      ++checked;
-      const float z = reg_depth.at<float>(v, u);
-      if (z <= 0) continue;
-      ++covered;
-      max_error = std::max(max_error, std::abs(z - z_color));
-    }
-  }
-  // No cracks inside the IR camera's view, and the nearest-surface splat is within the depth change
-  // across its footprint (slope 0.3 at 2.6 m: about 1.4 mm per IR pixel, so under 3 mm).
-  EXPECT_GT(checked, 200000);
-  EXPECT_GT(covered, 0.995 * checked);
-  EXPECT_LT(max_error, 0.003);
-  EXPECT_EQ(reg_holes.at<uint8_t>(240, 320), static_cast<uint8_t>(HoleCode::kValid));
+// The Azure Kinect's pair: both lenses far from pinholes (the depth camera's corners 20 pixels
+// off), colour at twice the depth camera's size, 3.2 cm apart.
+TEST(RegisterDepthToColor, DistortedLensesPutThePlaneWhereTheColourCameraSeesIt) {
+  const SE3 color_from_depth(Eigen::Quaterniond(Eigen::AngleAxisd(0.006, Eigen::Vector3d::UnitX())),
+                             Eigen::Vector3d(-0.032, -0.0022, 0.0039));
+  // A depth pixel near the corners spans 1.3 times the angle of one at the centre (fx 505
+  // against 580 above, too): its footprint's depth change on the plane is up to 4.5 mm.
+  EXPECT_GT(ExpectThePlaneWhereTheColourCameraSeesIt(testing::AzureKinectNfovDepthCamera(),
+                                                     testing::AzureKinect720pColorCamera(),
+                                                     color_from_depth, 0.0045),
+            500000);
 }
 
 TEST(RegisterDepthToColor, HolesKeepTheirClassAndNearSurfacesWin) {
