@@ -14,7 +14,7 @@ DEB_PACKAGES := cmake make g++ pkg-config \
   libopencv-dev libeigen3-dev libceres-dev libpcl-dev \
   libopenni2-dev libfreenect-dev \
   librosbag-storage-dev libroscpp-core-dev libsensor-msgs-dev libgeometry-msgs-dev \
-  libstd-msgs-dev \
+  libstd-msgs-dev libavformat-dev \
   libcli11-dev nlohmann-json3-dev libspdlog-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
   python3-numpy python3-opencv python3-open3d \

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "acquisition/azure_kinect_mkv.h"
 #include "acquisition/bounds.h"
 #include "acquisition/depth_registration.h"
 #include "acquisition/devices.h"
@@ -98,36 +99,6 @@ bool FrameSourceOptions::Check(std::string* message) const {
     return false;
   }
   return true;
-}
-
-std::vector<std::pair<size_t, size_t>> AssociateTimestamps(const std::vector<double>& a,
-                                                           const std::vector<double>& b,
-                                                           double max_dt) {
-  // Candidate pairs within the window (b is sorted, so a binary search bounds each a's range),
-  // then greedy by increasing time difference so that each frame is used at most once.
-  struct Candidate {
-    double dt;
-    size_t i, j;
-  };
-  std::vector<Candidate> candidates;
-  for (size_t i = 0; i < a.size(); ++i) {
-    auto lo = std::lower_bound(b.begin(), b.end(), a[i] - max_dt);
-    for (auto it = lo; it != b.end() && *it <= a[i] + max_dt; ++it) {
-      const double dt = std::abs(*it - a[i]);
-      if (dt < max_dt) candidates.push_back({dt, i, static_cast<size_t>(it - b.begin())});
-    }
-  }
-  std::stable_sort(candidates.begin(), candidates.end(),
-                   [](const Candidate& x, const Candidate& y) { return x.dt < y.dt; });
-  std::vector<bool> used_a(a.size(), false), used_b(b.size(), false);
-  std::vector<std::pair<size_t, size_t>> pairs;
-  for (const Candidate& c : candidates) {
-    if (used_a[c.i] || used_b[c.j]) continue;
-    used_a[c.i] = used_b[c.j] = true;
-    pairs.emplace_back(c.i, c.j);
-  }
-  std::sort(pairs.begin(), pairs.end());
-  return pairs;
 }
 
 void ProcessRawDepth(const cv::Mat& raw, const std::string& where, const CameraFile& camera,
@@ -453,6 +424,7 @@ std::string DetectInputKind(const std::string& input) {
   }
   if (IsRegularFile(input) && fs::path(input).extension() == ".oni") return "oni";
   if (IsRegularFile(input) && fs::path(input).extension() == ".bag") return "realsense_bag";
+  if (IsRegularFile(input) && fs::path(input).extension() == ".mkv") return "azure_kinect_mkv";
   return {};
 }
 
@@ -479,14 +451,15 @@ std::unique_ptr<FrameSource> OpenFrameSource(const std::string& input,
   const std::string kind = DetectInputKind(input);
   if (kind == "oni") return OpenOpenNI2Source(input, options);
   if (kind == "realsense_bag") return OpenRealSenseBag(input, options);
+  if (kind == "azure_kinect_mkv") return OpenAzureKinectMkv(input, options);
   if (kind == "tum") return OpenTumFolder(input, options);
   if (kind == "redwood") return OpenRedwoodFolder(input, options);
   if (kind == "fakenect" || kind == "kinect_raw") return OpenKinectRawFolder(input, options);
   throw InputError(input,
                    "unrecognised input: expected a TUM folder (rgb.txt, depth.txt), a Redwood "
                    "folder (image/ or color/, depth/), a raw Kinect folder (*.pgm, INDEX.txt), an "
-                   ".oni file, a RealSense .bag or a device (dummy, openni2[:URI], "
-                   "freenect[:INDEX])");
+                   ".oni file, a RealSense .bag, an Azure Kinect .mkv or a device (dummy, "
+                   "openni2[:URI], freenect[:INDEX])");
 }
 
 }  // namespace gf

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/associate.h"
 #include "acquisition/camera.h"
 #include "acquisition/depth.h"
 #include "acquisition/rgbd_frame.h"
@@ -155,19 +156,15 @@ class InMemoryFrameSource : public FrameSource {
 };
 
 // What kind of input a path is: "tum" (a folder with rgb.txt or depth.txt, even a broken one),
-// "redwood", "fakenect", "kinect_raw", "oni", "realsense_bag", or "" when unrecognised.
+// "redwood", "fakenect", "kinect_raw", "oni", "realsense_bag", "azure_kinect_mkv", or "" when
+// unrecognised.
 std::string DetectInputKind(const std::string& input);
 
 // Opens any supported input, detected from what it is: a TUM, Redwood or raw Kinect folder, an .oni
-// recording, a RealSense .bag (acquisition/realsense_bag.h), or a live device ("dummy" = OpenNI2's software device, "openni2[:URI]",
-// "freenect[:INDEX]"). Throws InputError naming the input when it is missing or of no known kind.
+// recording, a RealSense .bag (acquisition/realsense_bag.h), an Azure Kinect .mkv
+// (acquisition/azure_kinect_mkv.h), or a live device ("dummy" = OpenNI2's software device,
+// "openni2[:URI]", "freenect[:INDEX]"). Throws InputError naming the input when it is missing or of no known kind.
 std::unique_ptr<FrameSource> OpenFrameSource(const std::string& input,
                                              const FrameSourceOptions& options);
-
-// Pairs two sorted timestamp lists one-to-one by nearest time within max_dt (associate.py):
-// returns (index_a, index_b) pairs sorted by index_a.
-std::vector<std::pair<size_t, size_t>> AssociateTimestamps(const std::vector<double>& a,
-                                                           const std::vector<double>& b,
-                                                           double max_dt);
 
 }  // namespace gf

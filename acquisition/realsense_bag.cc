@@ -15,7 +15,6 @@
 #include <cmath>
 #include <cstring>
 #include <map>
-#include <numeric>
 #include <opencv2/imgproc.hpp>
 #include <regex>
 #endif
@@ -270,12 +269,6 @@ class RealSenseBagSource : public FrameSource {
     return "unreadable RealSense bag (truncated, not indexed or corrupt): " + what;
   }
 
-  static std::string Seconds(double s) {
-    char text[64];
-    std::snprintf(text, sizeof(text), "%.3f s", s);
-    return text;
-  }
-
   std::string StampText(size_t depth_index) const {
     char text[64];
     std::snprintf(text, sizeof(text), "%.6f", depth_stamps_[depth_index]);
@@ -336,41 +329,11 @@ class RealSenseBagSource : public FrameSource {
           .push_back(HeaderStamp(m, &buffer));
     if (depth_stamps_.empty()) throw InputError(path_, "no depth frames on " + depth_topic_);
     if (color_stamps_.empty()) throw InputError(path_, "no colour frames on " + color_topic_);
-    // Pair in time order, then keep the pairs in depth (bag) order.
-    auto order = [](const std::vector<double>& t) {
-      std::vector<size_t> o(t.size());
-      std::iota(o.begin(), o.end(), 0);
-      std::stable_sort(o.begin(), o.end(), [&](size_t a, size_t b) { return t[a] < t[b]; });
-      return o;
-    };
-    const std::vector<size_t> od = order(depth_stamps_), oc = order(color_stamps_);
-    std::vector<double> td, tc;
-    for (size_t i : od) td.push_back(depth_stamps_[i]);
-    for (size_t i : oc) tc.push_back(color_stamps_[i]);
-    // The streams of a RealSense run free: a colour frame is up to half a frame period from the
-    // nearest depth frame.
-    std::vector<double> intervals;
-    for (size_t i = 1; i < td.size(); ++i) intervals.push_back(td[i] - td[i - 1]);
-    double window = options_.max_association_dt_s;
-    if (!intervals.empty()) {
-      std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2,
-                       intervals.end());
-      window = std::max(window, 0.5 * intervals[intervals.size() / 2]);
-    }
-    for (const auto& [i, j] : AssociateTimestamps(td, tc, window))
-      pairs_.emplace_back(od[i], oc[j]);
-    std::sort(pairs_.begin(), pairs_.end());
+    pairs_ = PairRecordedStreams(depth_stamps_, color_stamps_, options_.max_association_dt_s,
+                                 path_);
     depth_wanted_.assign(depth_stamps_.size(), false);
     color_wanted_.assign(color_stamps_.size(), false);
     for (const auto& [d, c] : pairs_) depth_wanted_[d] = color_wanted_[c] = true;
-    if (pairs_.empty())
-      throw InputError(path_, "no depth frame has a colour frame within " + Seconds(window) +
-                                  " (depth stamps " + Seconds(td.front()) + " to " +
-                                  Seconds(td.back()) + ", colour " + Seconds(tc.front()) +
-                                  " to " + Seconds(tc.back()) + ")");
-    if (pairs_.size() < depth_stamps_.size())
-      spdlog::warn("{}: {} of {} depth frames have no colour frame within {}; left out", path_,
-                   depth_stamps_.size() - pairs_.size(), depth_stamps_.size(), Seconds(window));
   }
 
   // Holds the message's image when a pair still to come needs it.

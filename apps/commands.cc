@@ -383,12 +383,13 @@ void AddEvalCommand(CLI::App& app) {
 void AddCaptureCommand(CLI::App& app) {
   auto options = std::make_shared<CaptureOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "capture", "record a device (or .oni file) to a TUM-format folder for offline processing");
+      "capture", "record a device (or a .oni, .bag or .mkv recording) to a TUM-format folder");
   cmd->footer(
       "Example: glassfusion capture --device freenect --out cap --frames 300\nWrites: OUT as a TUM "
       "folder (rgb/, depth/, rgb.txt, depth.txt, camera.json).");
   cmd->add_option("--device", options->device,
-                  "dummy (OpenNI2's software device), openni2[:URI], freenect[:INDEX], or FILE.oni")
+                  "dummy (OpenNI2's software device), openni2[:URI], freenect[:INDEX], or a "
+                  "recording: FILE.oni, FILE.bag, FILE.mkv")
       ->required();
   cmd->add_option("--out", options->out_dir, "TUM folder to create")->required();
   auto frames = std::make_shared<std::string>();

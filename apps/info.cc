@@ -41,7 +41,8 @@ nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions op
     j["unmatched_depth"] = folder->unmatched_depth;
     j["unmatched_color"] = folder->unmatched_color;
   }
-  if (source->Kind() == "tum" || source->Kind() == "realsense_bag")
+  if (source->Kind() == "tum" || source->Kind() == "realsense_bag" ||
+      source->Kind() == "azure_kinect_mkv")
     j["duration_s"] = last_time - first_time;
   j["width"] = c.width;
   j["height"] = c.height;
@@ -58,7 +59,7 @@ nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions op
     const Camera& d = *cf.depth_camera;
     const Eigen::Vector3d t = cf.color_from_depth.translation();
     j["depth_camera"] = {{"width", d.width}, {"height", d.height}, {"fx", d.fx}, {"fy", d.fy},
-                         {"cx", d.cx},       {"cy", d.cy}};
+                         {"cx", d.cx},       {"cy", d.cy},       {"distortion", d.DistortionCoefficients()}};
     j["color_from_depth"] = {
         {"translation_m", {t.x(), t.y(), t.z()}},
         {"rotation_deg",

@@ -155,7 +155,10 @@ struct Pixel {
 Pixel RenderPixel(const Sensor& s, const Camera& camera, const SE3& world_from_camera, int u,
                   int v) {
   const Scene& scene = s.scene;
-  const Eigen::Vector3d ray_camera((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+  // The ray through the pixel, through the lens when it has distortion (the same values as the
+  // pinhole's (u - cx) / fx when it has none).
+  const Eigen::Vector2d n = camera.UndistortPixel({u, v});
+  const Eigen::Vector3d ray_camera(n.x(), n.y(), 1.0);
   const double ray_norm = ray_camera.norm();
   const Eigen::Vector3d dir = world_from_camera.RotationMatrix() * ray_camera / ray_norm;
   const Eigen::Vector3d origin = world_from_camera.translation();

@@ -151,7 +151,7 @@ Camera SynthCamera();
 CameraFile SynthCameraFile();
 // world_from_camera of frame i.
 std::vector<SE3> MakeTrajectory(const Scene& scene, const SynthOptions& options);
-// Renders one frame; frame_index seeds its sensor noise.
+// Renders one frame through `camera` (its lens distortion too); frame_index seeds its sensor noise.
 SynthFrame RenderFrame(const Scene& scene, const Camera& camera, const SE3& world_from_camera,
                        const KinectModelOptions& kinect, uint32_t seed, int frame_index);
 

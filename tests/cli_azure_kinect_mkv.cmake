@@ -1,0 +1,61 @@
+# An Azure Kinect .mkv end to end: a synthetic scene rendered through an Azure Kinect's two cameras
+# (a real device's lens models, depth 640x576 beside colour 1280x720) and written in k4arecorder's
+# layout by gf_synth_to_mkv is described by `info`; `reconstruct` tracks it to within 2 cm of the
+# ground truth and to the trajectory of the same frames exported to a TUM folder by `capture`;
+# `compare` runs to complete outputs; a truncated file gives exit 2 and one line naming it.
+include("${CMAKE_CURRENT_LIST_DIR}/run_and_expect.cmake")
+set(tmp "${CMAKE_CURRENT_BINARY_DIR}/cli_azure_kinect_mkv_tmp")
+file(REMOVE_RECURSE "${tmp}")
+file(MAKE_DIRECTORY "${tmp}")
+# run() where a zero exit is expected.
+macro(run_ok)
+  run(${ARGN})
+  expect("${ARGN}" 0 "")
+endmacro()
+# The ATE of `est` against `gt` in metres, into `var`.
+macro(ate gt est var)
+  run_ok("${GLASSFUSION}" eval --gt "${gt}" --est "${est}")
+  string(JSON ${var} GET "${out}" ate_rmse_m)
+endmacro()
+run_ok("${SYNTH_TO_MKV}" --scene glass-table --frames 20 --seed 11 --out "${tmp}/cap.mkv"
+       --groundtruth "${tmp}/groundtruth.txt")
+run_ok("${GLASSFUSION}" info "${tmp}/cap.mkv")
+string(JSON source GET "${out}" source)
+string(JSON frames GET "${out}" frames)
+string(JSON width GET "${out}" width)
+string(JSON k4 GET "${out}" depth_camera distortion 5)
+if(NOT source STREQUAL "azure_kinect_mkv" OR NOT frames EQUAL 20 OR NOT width EQUAL 1280 OR
+   k4 LESS 0.5)
+  message(FATAL_ERROR "unexpected info of the recording: ${out}")
+endif()
+run_ok("${GLASSFUSION}" reconstruct "${tmp}/cap.mkv" --out "${tmp}/mkv_run")
+file(READ "${tmp}/mkv_run/report.json" report)
+string(JSON complete GET "${report}" complete)
+if(NOT complete)
+  message(FATAL_ERROR "the recording's run is not complete")
+endif()
+ate("${tmp}/groundtruth.txt" "${tmp}/mkv_run/trajectory.txt" truth_ate)
+run_ok("${GLASSFUSION}" capture --device "${tmp}/cap.mkv" --out "${tmp}/folder")
+run_ok("${GLASSFUSION}" reconstruct "${tmp}/folder" --out "${tmp}/folder_run")
+ate("${tmp}/folder_run/trajectory.txt" "${tmp}/mkv_run/trajectory.txt" folder_ate)
+message("ATE against the ground truth ${truth_ate} m, against the exported folder ${folder_ate} m")
+if(truth_ate GREATER 0.02 OR folder_ate GREATER 0.005)
+  message(FATAL_ERROR "the recording's trajectory is off: ${truth_ate} m from the ground truth, "
+                      "${folder_ate} m from the exported folder's")
+endif()
+run_ok("${GLASSFUSION}" compare "${tmp}/cap.mkv" --out "${tmp}/compare" --frames 8)
+file(READ "${tmp}/compare/with_fill/report.json" report)
+string(JSON complete GET "${report}" complete)
+if(NOT complete OR NOT EXISTS "${tmp}/compare/compare.json")
+  message(FATAL_ERROR "compare on the recording is not complete")
+endif()
+# Truncated (its first 40%): exit 2, one line naming the file.
+file(SIZE "${tmp}/cap.mkv" size)
+math(EXPR keep "${size} * 4 / 10")
+execute_process(COMMAND head -c ${keep} "${tmp}/cap.mkv" OUTPUT_FILE "${tmp}/truncated.mkv")
+run("${GLASSFUSION}" info "${tmp}/truncated.mkv")
+expect("info on a truncated recording" 2 "^error: .*truncated.mkv: ")
+if(NOT err MATCHES "^error: [^\n]*truncated.mkv: [^\n]+$")
+  message(FATAL_ERROR "info on a truncated recording: more than one line: '${err}'")
+endif()
+file(REMOVE_RECURSE "${tmp}")
