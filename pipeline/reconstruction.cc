@@ -289,7 +289,9 @@ void Reconstruction::RefuseIfUnusable(const Stages& s, ReconstructionSummary* su
       why = "the fusion failed on every frame (" + std::to_string(tracked) +
             "): " + f["first_failure"].get<std::string>();
     else if (summary->surfels == 0)
-      why = "the map is empty: no frame gave a surfel (are the camera and the depth scale right?)";
+      why = "the map is empty: no surface was seen by enough of the " + std::to_string(tracked) +
+            " tracked frames to be kept (too few frames, or are the camera and the depth scale "
+            "right?)";
   }
   if (why.empty() && s.fill) {
     const json f = s.fill->Report();
