@@ -7,7 +7,8 @@ JOBS      ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
 # Every Debian (bookworm) package the build, the tests and the measuring scripts need (the ROS 1
-# bag library and message headers: RealSense .bag input; chromium:
+# bag library and message headers: RealSense .bag input; libavformat: Azure Kinect .mkv input;
+# nodejs: bundling the reports' 3D view from npm packages, and testing it; chromium:
 # the test that renders the demo report in a headless browser; slurm-wlm and munge: the test that
 # runs `batch --slurm` on a one-node cluster on loopback).
 DEB_PACKAGES := cmake make g++ pkg-config \
@@ -18,7 +19,7 @@ DEB_PACKAGES := cmake make g++ pkg-config \
   libcli11-dev nlohmann-json3-dev libspdlog-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
   python3-numpy python3-opencv python3-open3d \
-  colmap chromium slurm-wlm munge
+  colmap chromium slurm-wlm munge nodejs
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
@@ -40,6 +41,10 @@ deps:
 	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends $$missing; \
 	else \
 	  echo "deps: all $(words $(DEB_PACKAGES)) Debian packages present"; \
+	fi && \
+	if ! command -v npm >/dev/null; then \
+	  echo "deps: installing npm (Debian's nodejs comes without it)"; \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends npm; \
 	fi
 
 configure: deps

@@ -227,12 +227,14 @@ CompareSummary RunCompare(const ReconstructOptions& given) {
   WriteRenderings(&folder, source->camera(),
                   ReadTumTrajectory((out / "with_fill/trajectory.txt").string()));
   HtmlReport r("GlassFusion: the model with and without the stereo fill");
-  AddComparisonSections(&r, options.out_dir, "");
+  AddComparisonSections(&r, options.out_dir, "",
+                        [&](const std::string& name) { return folder.File(name); });
   WriteTextFileAtomically(folder.File("report.html"), r.Html());
   return summary;
 }
 
-void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std::string& prefix) {
+void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std::string& prefix,
+                           const ReportFile& file) {
   const fs::path dir(out_dir);
   const json c = json::parse(ReadTextFile((dir / "compare.json").string()));
   const json run = json::parse(ReadTextFile((dir / "with_fill/report.json").string()));
@@ -252,6 +254,9 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
   r->Images(
       Renderings(out_dir, prefix, FrameLabel(IndexedFileName(middle_index, middle.timestamp_text))),
       440);
+  AddMapView(r, file,
+             {{"with fill", (dir / "with_fill").string(), prefix + "with_fill/"},
+              {"without fill", (dir / "without_fill").string(), prefix + "without_fill/"}});
   if (c["with_fill"].contains("completeness")) {
     r->Paragraph(
         "Completeness: the share of the true surfaces the camera saw that have a surfel "

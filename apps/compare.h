@@ -24,6 +24,7 @@
 #include <string>
 
 #include "acquisition/trajectory.h"
+#include "apps/map_view.h"
 #include "apps/reconstruct.h"
 #include "apps/report_html.h"
 
@@ -41,8 +42,10 @@ CompareSummary RunCompare(const ReconstructOptions& options);
 // The comparison in DIR = out_dir (as RunCompare wrote it) as report sections: both maps rendered
 // from the same viewpoints, completeness and accuracy against ground truth, both maps' size over
 // time, the trajectory, fill overlays, timings, settings and links. `prefix` is DIR seen from the
-// report's folder ("" for DIR/report.html).
-void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std::string& prefix);
+// report's folder ("" for DIR/report.html); `file` gives the paths of files written beside the
+// report (the 3D view of both maps).
+void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std::string& prefix,
+                           const ReportFile& file);
 
 // The ground-truth part of compare.json for one map (in the run's frame), or null when `input`
 // has no ground truth.

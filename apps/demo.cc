@@ -332,7 +332,8 @@ void RunDemo(const DemoOptions& options) {
   AddSceneSections(&r, options, synth_summary, sensor);
   AddFillSections(&r, fill);
   r.Heading("The model (glassfusion compare)");
-  AddComparisonSections(&r, compare_dir, "compare/");
+  AddComparisonSections(&r, compare_dir, "compare/",
+                        [&](const std::string& name) { return folder.File(name); });
   AddDatasetSection(&r, data_dir, datasets);
   WriteTextFileAtomically(folder.File("report.json"), JsonText(report) + "\n");
   WriteTextFileAtomically(folder.File("report.html"), r.Html());

@@ -131,7 +131,8 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
     }
     try {
       sink.File("report.html");
-      WriteRunReport(options.out_dir, options.input, report);
+      WriteRunReport(options.out_dir, options.input, report,
+                     [&](const std::string& name) { return sink.File(name); });
     } catch (const std::exception& e) {
       throw std::runtime_error(options.out_dir + "/report.html not written: " + e.what());
     }

@@ -195,6 +195,8 @@ void HtmlReport::Figure(const std::string& svg, const std::string& caption) {
   body_ += "<figure>" + svg + "<figcaption>" + HtmlEscape(caption) + "</figcaption></figure>\n";
 }
 
+void HtmlReport::RawHtml(const std::string& html) { body_ += html; }
+
 void HtmlReport::Preformatted(const std::string& text) {
   body_ += "<pre>" + HtmlEscape(text) + "</pre>\n";
 }

@@ -54,6 +54,8 @@ class HtmlReport {
   void Images(const std::vector<std::pair<std::string, std::string>>& images, int width = 480);
   void Figure(const std::string& svg, const std::string& caption);
   void Preformatted(const std::string& text);
+  // Markup as it is (the caller's own, never text from input files).
+  void RawHtml(const std::string& html);
   // A collapsed block: `summary` shown, `text` preformatted inside.
   void Details(const std::string& summary, const std::string& text);
   // A list of links (href relative to the report, text) with a description after each.

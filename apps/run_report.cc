@@ -40,7 +40,8 @@ std::string Format(const char* format, double value) {
   return buffer;
 }
 
-// The keyframes of a run as undistorted/ names them (<index>_<ts>.png), in frame order.
+}  // namespace
+
 std::vector<std::string> KeyframeFiles(const std::string& run_dir) {
   std::vector<std::string> names;
   const fs::path dir = fs::path(run_dir) / "undistorted" / "color";
@@ -51,6 +52,8 @@ std::vector<std::string> KeyframeFiles(const std::string& run_dir) {
   std::sort(names.begin(), names.end());
   return names;
 }
+
+namespace {
 
 // Two orthonormal directions along which `points` spread most (the plane seen "from above").
 std::pair<Eigen::Vector3d, Eigen::Vector3d> MainDirections(
@@ -235,7 +238,8 @@ void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& 
   r->Links(links);
 }
 
-void WriteRunReport(const std::string& run_dir, const std::string& input, const json& report) {
+void WriteRunReport(const std::string& run_dir, const std::string& input, const json& report,
+                    const ReportFile& file) {
   const Trajectory estimate = ReadTumTrajectory((fs::path(run_dir) / "trajectory.txt").string());
   const std::string truth_file = GroundTruthBeside(input);
   const Trajectory truth = truth_file.empty() ? Trajectory() : ReadTrajectory(truth_file);
@@ -248,6 +252,7 @@ void WriteRunReport(const std::string& run_dir, const std::string& input, const 
   if (report.contains("surfels") && report["surfels"].is_object()) {
     r.Heading("The model");
     AddSurfelCountFigure(&r, {{"surfels", report["surfels"]}});
+    AddMapView(&r, file, {{"the map", run_dir, ""}});
   }
   r.Heading("Stereo fill");
   AddFillOverlays(&r, run_dir, "");

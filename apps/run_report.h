@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "acquisition/trajectory.h"
+#include "apps/map_view.h"
 #include "apps/report_html.h"
 
 namespace gf {
@@ -29,6 +30,8 @@ const std::string& CommandLine();
 // image name (<index>_<ts>.png).
 std::string FrameLabel(const std::string& file);
 
+// The keyframes of a run as undistorted/ names them (<index>_<ts>.png), in frame order.
+std::vector<std::string> KeyframeFiles(const std::string& run_dir);
 // One line on what the run did, from its report.json (and the ATE when known, metres).
 std::string RunSummaryText(const nlohmann::ordered_json& report, const double* ate_m);
 
@@ -55,7 +58,8 @@ void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& 
 // RUN/report.html for `reconstruct`: every section above, for the run in run_dir whose report is
 // `report` (its report.json; the page is written before it) and its input's groundtruth.txt,
 // when there is one, for the ATE and the trajectory figure.
+// `file` gives the paths of the files written beside it (the 3D view's scripts).
 void WriteRunReport(const std::string& run_dir, const std::string& input,
-                    const nlohmann::ordered_json& report);
+                    const nlohmann::ordered_json& report, const ReportFile& file);
 
 }  // namespace gf

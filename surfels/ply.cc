@@ -71,25 +71,27 @@ void Assign(const std::string& name, double v, Surfel* s) {
 
 }  // namespace
 
-void WriteSurfelPly(const std::string& path, const std::vector<Surfel>& surfels) {
+std::string SurfelPlyBytes(const std::vector<Surfel>& surfels, bool normals) {
   std::ostringstream header;
   header << "ply\nformat binary_little_endian 1.0\ncomment GlassFusion surfel map (world frame, "
             "metres)\nelement vertex "
-         << surfels.size()
-         << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\n"
-            "property float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\n"
-            "property uchar blue\nproperty float radius\nproperty float confidence\n"
-            "property uchar source\nend_header\n";
-  constexpr size_t kRecord = 6 * 4 + 3 + 4 + 4 + 1;
-  std::string body(surfels.size() * kRecord, '\0');
-  char* p = body.data();
+         << surfels.size() << "\nproperty float x\nproperty float y\nproperty float z\n"
+         << (normals ? "property float nx\nproperty float ny\nproperty float nz\n" : "")
+         << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+            "property float radius\nproperty float confidence\nproperty uchar source\n"
+            "end_header\n";
+  const size_t kRecord = (normals ? 6 : 3) * 4 + 3 + 4 + 4 + 1;
+  std::string body = header.str();
+  const size_t start = body.size();
+  body.resize(start + surfels.size() * kRecord);
+  char* p = body.data() + start;
   auto put = [&](const void* v, size_t n) {
     std::memcpy(p, v, n);
     p += n;
   };
   for (const Surfel& s : surfels) {
     put(s.position.data(), 12);
-    put(s.normal.data(), 12);
+    if (normals) put(s.normal.data(), 12);
     put(&s.red, 1);
     put(&s.green, 1);
     put(&s.blue, 1);
@@ -97,11 +99,15 @@ void WriteSurfelPly(const std::string& path, const std::vector<Surfel>& surfels)
     put(&s.confidence, 4);
     put(&s.source, 1);
   }
+  return body;
+}
+
+void WriteSurfelPly(const std::string& path, const std::vector<Surfel>& surfels) {
+  const std::string bytes = SurfelPlyBytes(surfels);
   WriteFileAtomically(path, [&](const std::string& temporary) {
     std::ofstream out(temporary, std::ios::binary);
     if (!out) throw InputError(path, "cannot open for writing");
-    out << header.str();
-    out.write(body.data(), static_cast<std::streamsize>(body.size()));
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     out.close();
     if (!out) throw InputError(path, "write error (disk full?)");
   });

@@ -3,8 +3,8 @@
 # holes, almost no filled clear-glass pixel that the map does not mark as glass takes the glass's
 # own depth instead of the background seen through it (the goal is none; at most 1%: the sensor
 # itself reads the glass surface on about a fifth of the clear-glass pixels around those holes;
-# where the map marks glass, its transparent surfels give the glass's depth on purpose), and headless Chromium renders report.html
-# with every image loaded, its plots and its tables.
+# where the map marks glass, its transparent surfels give the glass's depth on purpose), and headless
+# Chromium renders report.html with every image loaded, its plots, its tables and its 3D view.
 set(work "${CMAKE_CURRENT_BINARY_DIR}/cli_demo_glass_tmp")
 file(REMOVE_RECURSE "${work}")
 execute_process(COMMAND "${GLASSFUSION}" demo --out "${work}" --data "${work}/no-datasets"
@@ -64,5 +64,20 @@ else()
     message(FATAL_ERROR "report.html in chromium: ${loaded}/${images} images, ${n_plots} plots, "
                         "${n_tables} tables (want all of >= 8 images, >= 3 plots, >= 5 tables)")
   endif()
+endif()
+# The 3D view of both maps (viewer/): drawn in headless Chromium with software WebGL, the stereo
+# fill's colour in the with-fill pane only, a source toggle changing the picture, a keyframe's
+# overlay shown on a click, both panes turning together.
+find_program(NODE node)
+if(CHROMIUM AND NODE AND EXISTS "${work}/gf_viewer.js")
+  execute_process(COMMAND "${NODE}" "${CMAKE_CURRENT_LIST_DIR}/../viewer/test/viewer_test.mjs"
+                          "${work}/report.html"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 180)
+  message("${out}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "the report's 3D view in chromium (${rc}): ${out}${err}")
+  endif()
+elseif(NOT EXISTS "${work}/gf_viewer.js")
+  message("no 3D view in the report (built without node and npm)")
 endif()
 file(REMOVE_RECURSE "${work}")
