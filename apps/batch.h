@@ -34,7 +34,7 @@
 // tasks have finished. Every node must see MANIFEST's captures, DIR and the glassfusion executable
 // at the same paths (a shared filesystem).
 //
-// Summary: DIR/summary.csv and DIR/summary.html (report writer of apps/report_html.h): per capture
+// Summary: DIR/summary.csv and DIR/summary.html (report writer of report/report_html.h): per capture
 // its status, frames, time, ATE where ground truth exists, surfels with and without the fill,
 // completeness gain where ground truth exists, fill rate, a link to its report; totals first.
 #pragma once

@@ -7,7 +7,7 @@
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
 #include "apps/batch.h"
-#include "apps/report_html.h"
+#include "report/report_html.h"
 
 namespace fs = std::filesystem;
 

@@ -16,6 +16,7 @@
 #include "apps/progress.h"
 #include "apps/reconstruct.h"
 #include "datasets/synth.h"
+#include "eval/map_truth.h"
 #include "pipeline/settings.h"
 
 namespace gf {

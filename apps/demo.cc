@@ -10,17 +10,19 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
-#include "acquisition/run_folder.h"
 #include "acquisition/json_text.h"
+#include "acquisition/run_folder.h"
 #include "acquisition/stats.h"
 #include "apps/compare.h"
 #include "apps/info.h"
 #include "apps/progress.h"
 #include "apps/reconstruct.h"
-#include "apps/report_html.h"
-#include "apps/run_report.h"
 #include "datasets/synth.h"
+#include "eval/fill_truth.h"
 #include "pipeline/settings.h"
+#include "report/compare_report.h"
+#include "report/report_html.h"
+#include "report/run_report.h"
 
 namespace fs = std::filesystem;
 
@@ -51,110 +53,6 @@ cv::Mat Overview(const RgbdFrame& frame) {
   cv::hconcat(std::vector<cv::Mat>{frame.color, depth_color, holes}, row);
   cv::resize(row, row, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
   return row;
-}
-
-constexpr int kMaterials = 5;
-
-std::string MaterialName(int m) { return synth::MaterialName(static_cast<synth::Material>(m)); }
-
-// The sensor's holes per material over every frame of the scene (ground-truth labels).
-struct SensorHoles {
-  std::vector<size_t> holes = std::vector<size_t>(kMaterials, 0);
-  std::vector<size_t> pixels = std::vector<size_t>(kMaterials, 0);
-};
-
-SensorHoles MeasureSensorHoles(const std::string& scene_dir, RgbdFrame* first) {
-  auto source = OpenFrameSource(scene_dir, {});
-  SensorHoles h;
-  RgbdFrame frame;
-  while (source->Next(&frame)) {
-    const cv::Mat label =
-        cv::imread((fs::path(scene_dir) / "gt/label" / (frame.timestamp_text + ".png")).string(),
-                   cv::IMREAD_UNCHANGED);
-    if (label.empty())
-      throw InputError(scene_dir, "ground-truth label of " + frame.timestamp_text + " missing");
-    for (int v = 0; v < label.rows; ++v)
-      for (int u = 0; u < label.cols; ++u) {
-        const int m = label.at<uint8_t>(v, u);
-        if (m >= kMaterials) continue;
-        ++h.pixels[m];
-        h.holes[m] += frame.hole_mask.at<uint8_t>(v, u) != 0;
-      }
-    if (frame.index == 0) *first = frame;
-  }
-  return h;
-}
-
-// The keyframes' fill scored per material against the depth of what the colour camera sees there
-// (through clear glass: the background).
-struct FillScore {
-  std::vector<size_t> holes = std::vector<size_t>(kMaterials, 0);
-  std::vector<size_t> filled = std::vector<size_t>(kMaterials, 0);
-  std::vector<size_t> good = std::vector<size_t>(kMaterials, 0);  // within 3%
-  std::vector<std::vector<float>> errors = std::vector<std::vector<float>>(kMaterials);
-  // Filled clear-glass pixels that take the glass's own depth instead of the background's where
-  // the map does not mark glass (glass_mask.png): the goal is none. Where it marks glass, the map's
-  // transparent surfels complete the keyframe with the glass's depth on purpose; counted apart.
-  size_t clear_glass_at_glass_depth = 0;
-  size_t clear_glass_marked_at_glass_depth = 0;
-  double Rate(const std::vector<size_t>& n, int m) const {
-    return holes[m] ? static_cast<double>(n[m]) / holes[m] : 0.0;
-  }
-};
-
-void ScoreKeyframe(const std::string& scene_dir, const fs::path& keyframes, const std::string& ts,
-                   double truth_scale, FillScore* score) {
-  const cv::Mat filled = ReadDepthImage((keyframes / (ts + ".depth_filled.png")).string());
-  const cv::Mat holes =
-      cv::imread((keyframes / (ts + ".hole_mask.png")).string(), cv::IMREAD_UNCHANGED);
-  const cv::Mat label =
-      cv::imread((fs::path(scene_dir) / "gt/label" / (ts + ".png")).string(), cv::IMREAD_UNCHANGED);
-  const cv::Mat truth =
-      ReadDepthImage((fs::path(scene_dir) / "gt/visible_depth" / (ts + ".png")).string());
-  const cv::Mat first_surface =
-      ReadDepthImage((fs::path(scene_dir) / "gt/depth" / (ts + ".png")).string());
-  // Absent with --no-glass, or when the map holds no glass in the keyframe's view.
-  const fs::path glass_file = keyframes / (ts + ".glass_mask.png");
-  const cv::Mat glass = fs::exists(glass_file)
-                            ? cv::imread(glass_file.string(), cv::IMREAD_UNCHANGED)
-                            : cv::Mat::zeros(label.size(), CV_8U);
-  if (holes.empty() || label.empty() || glass.size() != label.size())
-    throw InputError(keyframes.string(),
-                     "keyframe " + ts + ": a mask or the label missing, or of another size");
-  const int clear_glass = static_cast<int>(synth::Material::kClearGlass);
-  for (int v = 0; v < label.rows; ++v)
-    for (int u = 0; u < label.cols; ++u) {
-      const int m = label.at<uint8_t>(v, u);
-      if (m >= kMaterials || holes.at<uint8_t>(v, u) == 0) continue;
-      ++score->holes[m];
-      const double z = filled.at<uint16_t>(v, u) / 1000.0,
-                   t = truth.at<uint16_t>(v, u) / truth_scale;
-      if (z <= 0 || t <= 0) continue;
-      ++score->filled[m];
-      const double e = std::abs(z - t) / t;
-      score->errors[m].push_back(static_cast<float>(e));
-      score->good[m] += e <= 0.03;
-      if (m == clear_glass &&
-          synth::AtClearGlassDepth(z, first_surface.at<uint16_t>(v, u) / truth_scale, t))
-        ++(glass.at<uint8_t>(v, u) ? score->clear_glass_marked_at_glass_depth
-                                   : score->clear_glass_at_glass_depth);
-    }
-}
-
-FillScore ScoreFill(const std::string& scene_dir, const std::string& run_dir) {
-  const double truth_scale =
-      LoadCameraFile((fs::path(scene_dir) / "camera.json").string()).depth_scale;
-  FillScore score;
-  const fs::path keyframes = fs::path(run_dir) / "keyframes";
-  const std::string suffix = ".depth_filled.png";
-  for (const auto& entry : fs::directory_iterator(keyframes)) {
-    const std::string name = entry.path().filename().string();
-    if (name.size() > suffix.size() &&
-        !name.compare(name.size() - suffix.size(), suffix.size(), suffix))
-      ScoreKeyframe(scene_dir, keyframes, name.substr(0, name.size() - suffix.size()), truth_scale,
-                    &score);
-  }
-  return score;
 }
 
 }  // namespace
@@ -200,7 +98,7 @@ void AddSceneSections(HtmlReport* r, const DemoOptions& options,
       "blue: projector shadow, green: out of range).");
   r->Images({{"overview.png", "frame 0 (t = 0 s): colour, depth, holes"}}, 960);
   std::vector<std::vector<std::string>> rows;
-  for (int m = 0; m < kMaterials; ++m)
+  for (int m = 0; m < kSynthMaterials; ++m)
     rows.push_back({MaterialName(m), std::to_string(sensor.pixels[m]),
                     Percent(sensor.pixels[m] ? double(sensor.holes[m]) / sensor.pixels[m] : 0)});
   r->Paragraph(
@@ -216,7 +114,7 @@ void AddFillSections(HtmlReport* r, const FillScore& fill) {
       "camera sees (through clear glass: the background); good = within 3%.");
   std::vector<std::vector<std::string>> rows;
   std::vector<double> errors;
-  for (int m = 0; m < kMaterials; ++m) {
+  for (int m = 0; m < kSynthMaterials; ++m) {
     rows.push_back({MaterialName(m), std::to_string(fill.holes[m]),
                     Percent(fill.Rate(fill.filled, m)), Percent(fill.Rate(fill.good, m)),
                     Percent(Median(fill.errors[m]))});
@@ -255,7 +153,7 @@ void AddDatasetSection(HtmlReport* r, const std::string& data_dir,
 
 nlohmann::ordered_json FillJson(const FillScore& fill) {
   nlohmann::ordered_json by_material = nlohmann::ordered_json::object();
-  for (int m = 0; m < kMaterials; ++m)
+  for (int m = 0; m < kSynthMaterials; ++m)
     by_material[MaterialName(m)] = {{"hole_pixels", fill.holes[m]},
                                     {"filled_pixels", fill.filled[m]},
                                     {"fill_rate", fill.Rate(fill.filled, m)},
@@ -316,7 +214,7 @@ void RunDemo(const DemoOptions& options) {
                      {"generation_ms_per_frame", 1000.0 * synth_summary.seconds_per_frame},
                      {"info", InputInfo(scene_dir, {})}};
   report["holes_by_material"] = nlohmann::ordered_json::object();
-  for (int m = 0; m < kMaterials; ++m)
+  for (int m = 0; m < kSynthMaterials; ++m)
     report["holes_by_material"][MaterialName(m)] = {
         {"pixels", sensor.pixels[m]},
         {"hole_fraction", sensor.pixels[m] ? double(sensor.holes[m]) / sensor.pixels[m] : 0.0}};

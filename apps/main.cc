@@ -14,7 +14,7 @@
 #include "acquisition/errors.h"
 #include "apps/commands.h"
 #include "apps/interrupt.h"
-#include "apps/run_report.h"
+#include "report/run_report.h"
 
 int main(int argc, char** argv) {
   // Every keyframe pair allocates and frees tens of megabytes (images, cost volumes). glibc would

@@ -8,8 +8,8 @@
 #include "acquisition/errors.h"
 #include "apps/interrupt.h"
 #include "apps/progress.h"
-#include "apps/run_report.h"
 #include "pipeline/run_sink.h"
+#include "report/run_report.h"
 #include "surfels/mesh.h"
 #include "surfels/ply.h"
 

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "apps/report_html.h"
+#include "report/report_html.h"
 
 namespace gf {
 

@@ -1,4 +1,4 @@
-#include "apps/map_view.h"
+#include "report/map_view.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -8,8 +8,8 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/trajectory.h"
-#include "apps/run_report.h"
 #include "pipeline/run_sink.h"
+#include "report/run_report.h"
 #include "surfels/ply.h"
 
 namespace gf {

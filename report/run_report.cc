@@ -1,4 +1,4 @@
-#include "apps/run_report.h"
+#include "report/run_report.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "acquisition/trajectory.h"
-#include "apps/map_view.h"
-#include "apps/report_html.h"
+#include "report/map_view.h"
+#include "report/report_html.h"
 
 namespace gf {
 

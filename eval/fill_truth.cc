@@ -1,0 +1,99 @@
+#include "eval/fill_truth.h"
+
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "acquisition/camera.h"
+#include "acquisition/errors.h"
+#include "acquisition/frame_source.h"
+#include "acquisition/image_io.h"
+#include "datasets/synth.h"
+
+namespace fs = std::filesystem;
+
+namespace gf {
+namespace {
+
+void ScoreKeyframe(const std::string& scene_dir, const fs::path& keyframes, const std::string& ts,
+                   double truth_scale, FillScore* score) {
+  const cv::Mat filled = ReadDepthImage((keyframes / (ts + ".depth_filled.png")).string());
+  const cv::Mat holes =
+      cv::imread((keyframes / (ts + ".hole_mask.png")).string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat label =
+      cv::imread((fs::path(scene_dir) / "gt/label" / (ts + ".png")).string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat truth =
+      ReadDepthImage((fs::path(scene_dir) / "gt/visible_depth" / (ts + ".png")).string());
+  const cv::Mat first_surface =
+      ReadDepthImage((fs::path(scene_dir) / "gt/depth" / (ts + ".png")).string());
+  // Absent with --no-glass, or when the map holds no glass in the keyframe's view.
+  const fs::path glass_file = keyframes / (ts + ".glass_mask.png");
+  const cv::Mat glass = fs::exists(glass_file)
+                            ? cv::imread(glass_file.string(), cv::IMREAD_UNCHANGED)
+                            : cv::Mat::zeros(label.size(), CV_8U);
+  if (holes.empty() || label.empty() || glass.size() != label.size())
+    throw InputError(keyframes.string(),
+                     "keyframe " + ts + ": a mask or the label missing, or of another size");
+  const int clear_glass = static_cast<int>(synth::Material::kClearGlass);
+  for (int v = 0; v < label.rows; ++v)
+    for (int u = 0; u < label.cols; ++u) {
+      const int m = label.at<uint8_t>(v, u);
+      if (m >= kSynthMaterials || holes.at<uint8_t>(v, u) == 0) continue;
+      ++score->holes[m];
+      const double z = filled.at<uint16_t>(v, u) / 1000.0,
+                   t = truth.at<uint16_t>(v, u) / truth_scale;
+      if (z <= 0 || t <= 0) continue;
+      ++score->filled[m];
+      const double e = std::abs(z - t) / t;
+      score->errors[m].push_back(static_cast<float>(e));
+      score->good[m] += e <= 0.03;
+      if (m == clear_glass &&
+          synth::AtClearGlassDepth(z, first_surface.at<uint16_t>(v, u) / truth_scale, t))
+        ++(glass.at<uint8_t>(v, u) ? score->clear_glass_marked_at_glass_depth
+                                   : score->clear_glass_at_glass_depth);
+    }
+}
+
+}  // namespace
+
+std::string MaterialName(int m) { return synth::MaterialName(static_cast<synth::Material>(m)); }
+
+SensorHoles MeasureSensorHoles(const std::string& scene_dir, RgbdFrame* first) {
+  auto source = OpenFrameSource(scene_dir, {});
+  SensorHoles h;
+  RgbdFrame frame;
+  while (source->Next(&frame)) {
+    const cv::Mat label =
+        cv::imread((fs::path(scene_dir) / "gt/label" / (frame.timestamp_text + ".png")).string(),
+                   cv::IMREAD_UNCHANGED);
+    if (label.empty())
+      throw InputError(scene_dir, "ground-truth label of " + frame.timestamp_text + " missing");
+    for (int v = 0; v < label.rows; ++v)
+      for (int u = 0; u < label.cols; ++u) {
+        const int m = label.at<uint8_t>(v, u);
+        if (m >= kSynthMaterials) continue;
+        ++h.pixels[m];
+        h.holes[m] += frame.hole_mask.at<uint8_t>(v, u) != 0;
+      }
+    if (frame.index == 0) *first = frame;
+  }
+  return h;
+}
+
+FillScore ScoreFill(const std::string& scene_dir, const std::string& run_dir) {
+  const double truth_scale =
+      LoadCameraFile((fs::path(scene_dir) / "camera.json").string()).depth_scale;
+  FillScore score;
+  const fs::path keyframes = fs::path(run_dir) / "keyframes";
+  const std::string suffix = ".depth_filled.png";
+  for (const auto& entry : fs::directory_iterator(keyframes)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() > suffix.size() &&
+        !name.compare(name.size() - suffix.size(), suffix.size(), suffix))
+      ScoreKeyframe(scene_dir, keyframes, name.substr(0, name.size() - suffix.size()), truth_scale,
+                    &score);
+  }
+  return score;
+}
+
+}  // namespace gf

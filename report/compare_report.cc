@@ -1,0 +1,137 @@
+#include "report/compare_report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "acquisition/file_util.h"
+#include "acquisition/trajectory.h"
+#include "pipeline/run_sink.h"
+#include "report/run_report.h"
+
+namespace fs = std::filesystem;
+
+namespace gf {
+namespace {
+
+using json = nlohmann::ordered_json;
+
+std::string Percent(const json& share) {
+  if (!share.is_number()) return "-";
+  char buffer[16];
+  std::snprintf(buffer, sizeof(buffer), "%.1f%%", 100 * share.get<double>());
+  return buffer;
+}
+
+// The renderings that exist, with their captions, as seen from the report (prefix + name).
+std::vector<std::pair<std::string, std::string>> Renderings(const std::string& out_dir,
+                                                            const std::string& prefix,
+                                                            const std::string& middle_frame) {
+  std::vector<std::pair<std::string, std::string>> images;
+  for (const std::string view : {"camera", "above"})
+    for (const std::string map : {"with_fill", "without_fill"}) {
+      const std::string file = map + "_" + view + ".png";
+      if (!IsRegularFile((fs::path(out_dir) / file).string())) continue;
+      images.push_back(
+          {prefix + file, std::string(map == "with_fill" ? "with" : "without") +
+                              " the fill, seen from " +
+                              (view == "camera" ? middle_frame + "'s viewpoint" : "above")});
+    }
+  return images;
+}
+
+std::vector<std::vector<std::string>> CompletenessRows(const json& compare, const char* within) {
+  std::vector<std::vector<std::string>> rows;
+  const json& w = compare["with_fill"]["completeness"];
+  const json& wo = compare["without_fill"]["completeness"];
+  rows.push_back(
+      {"all observed surfaces", Percent(w["overall"][within]), Percent(wo["overall"][within])});
+  for (const auto& [name, c] : w["per_material"].items())
+    rows.push_back({name, Percent(c[within]), Percent(wo["per_material"][name][within])});
+  return rows;
+}
+
+}  // namespace
+
+void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std::string& prefix,
+                           const ReportFile& file) {
+  const fs::path dir(out_dir);
+  const json c = json::parse(ReadTextFile((dir / "compare.json").string()));
+  const json run = json::parse(ReadTextFile((dir / "with_fill/report.json").string()));
+  const std::string input = c["input"];
+  const Trajectory estimate = ReadTumTrajectory((dir / "with_fill/trajectory.txt").string());
+  const std::string truth_file = GroundTruthBeside(input);
+  const Trajectory truth = truth_file.empty() ? Trajectory() : ReadTrajectory(truth_file);
+  const double ate = c.value("ate_m", 0.0);
+  r->Paragraph("Input: " + input +
+               ". One tracking run, fused twice: the sensor's depth with the keyframes' stereo "
+               "fills (with_fill/) and without them (without_fill/). " +
+               RunSummaryText(run, c.contains("ate_m") ? &ate : nullptr));
+  r->Heading("The two models");
+  const StampedPose& middle = estimate[estimate.size() / 2];
+  const int middle_index =
+      run["input"].value("first_frame", 0) + static_cast<int>(estimate.size() / 2);
+  r->Images(
+      Renderings(out_dir, prefix, FrameLabel(IndexedFileName(middle_index, middle.timestamp_text))),
+      440);
+  AddMapView(r, file,
+             {{"with fill", (dir / "with_fill").string(), prefix + "with_fill/"},
+              {"without fill", (dir / "without_fill").string(), prefix + "without_fill/"}});
+  if (c["with_fill"].contains("completeness")) {
+    r->Paragraph(
+        "Completeness: the share of the true surfaces the camera saw that have a surfel "
+        "within 1 cm and within 2 cm (synthetic ground truth).");
+    std::vector<std::vector<std::string>> rows = CompletenessRows(c, "within_1cm");
+    const std::vector<std::vector<std::string>> cm2 = CompletenessRows(c, "within_2cm");
+    for (size_t i = 0; i < rows.size(); ++i)
+      rows[i].insert(rows[i].end(), cm2[i].begin() + 1, cm2[i].end());
+    r->Table(
+        {"surface", "1 cm, with the fill", "1 cm, without", "2 cm, with the fill", "2 cm, without"},
+        rows);
+    const json& a = c["with_fill"]["accuracy"];
+    if (a["fill_median_m"].is_number())
+      r->Paragraph(
+          "Accuracy of the fill's surfels: median distance to the true surface " +
+          std::to_string(static_cast<int>(std::round(1000 * a["fill_median_m"].get<double>()))) +
+          " mm, 90% within " +
+          std::to_string(static_cast<int>(std::round(1000 * a["fill_p90_m"].get<double>()))) +
+          " mm (" + std::to_string(a["fill_surfels"].get<long>()) + " surfels).");
+    if (a.contains("transparent_median_m") && a["transparent_median_m"].is_number())
+      r->Paragraph("Accuracy of the transparent surfels (clear glass the sensor both read and saw "
+                   "through): median distance to the true surface " +
+                   std::to_string(static_cast<int>(
+                       std::round(1000 * a["transparent_median_m"].get<double>()))) +
+                   " mm, 90% within " +
+                   std::to_string(static_cast<int>(
+                       std::round(1000 * a["transparent_p90_m"].get<double>()))) +
+                   " mm (" + std::to_string(a["transparent_surfels"].get<long>()) + " surfels).");
+  }
+  std::vector<std::vector<std::string>> sizes;
+  for (const char* v : {"with_fill", "without_fill"}) {
+    const json& s = c[v]["surfels"];
+    sizes.push_back({v, std::to_string(s["count"].get<long>()),
+                     std::to_string(s["by_source"]["sensor"].get<long>()),
+                     std::to_string(s["by_source"]["stereo_fill"].get<long>()),
+                     std::to_string(s["by_source"].value("transparent", 0L))});
+  }
+  r->Table({"map", "surfels", "from the sensor", "from the stereo fill", "transparent"}, sizes);
+  AddSurfelCountFigure(
+      r, {{"with the fill", c["with_fill"]["surfels"]}, {"without", c["without_fill"]["surfels"]}});
+  r->Heading("Trajectory");
+  AddTrajectoryFigure(r, estimate, c.contains("ate_m") ? truth : Trajectory());
+  r->Heading("Stereo fill");
+  AddFillOverlays(r, (dir / "with_fill").string(), prefix + "with_fill/");
+  r->Heading("Time per stage");
+  AddStageTimings(r, run);
+  r->Heading("Settings and files");
+  AddSettings(r, run);
+  r->Links({{prefix + "compare.json", "compare.json", "the figures above, as numbers"}});
+  for (const char* v : {"with_fill", "without_fill"}) {
+    r->Paragraph(std::string(v) + "/:");
+    AddFileLinks(r, (dir / v).string(), prefix + v + "/");
+  }
+}
+
+}  // namespace gf
