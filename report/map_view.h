@@ -20,7 +20,7 @@
 
 namespace gf {
 
-inline constexpr size_t kMaxViewSurfels = 1'000'000;  // per map, surfels on the page
+inline constexpr size_t kMaxViewSurfels = 500'000;  // per map, surfels on the page
 
 // A run folder whose map.ply the view shows, under `name` ("with fill").
 struct ViewedMap {

@@ -3,6 +3,9 @@
 //   OUTDIR/report.html         a "with fill" map of N surfels and a smaller "without fill" map
 //   OUTDIR/small/report.html   the same scene with 20,000 surfels, for quick iteration
 // Usage: node make_big_view.mjs OUTDIR [N=1000000] [--one-map] [--empty-second] [--no-keyframes]
+//                                [--page-cap M]
+//   --page-cap M    at most M surfels of each map on the page, evenly spread, as a report keeps
+//                   them (apps/map_view.h kMaxViewSurfels); the page states the full count
 //   --one-map       only the "with fill" map (a plain run)
 //   --empty-second  the "without fill" map has zero surfels
 //   --no-keyframes  no keyframes (the path is still drawn)
@@ -20,14 +23,17 @@ const SMALL_N = 20000;
 
 function parseArgs(argv) {
   const flags = new Set(argv.filter((a) => a.startsWith('--')));
-  const rest = argv.filter((a) => !a.startsWith('--'));
+  const capValue = argv.indexOf('--page-cap') >= 0 ? argv[argv.indexOf('--page-cap') + 1] : null;
+  const rest = argv.filter((a) => !a.startsWith('--') && a !== capValue);
   if (rest.length < 1) {
     console.error('usage: node make_big_view.mjs OUTDIR [N] [--one-map] [--empty-second] [--no-keyframes]');
     process.exit(2);
   }
   const n = rest[1] ? Number(rest[1]) : 1000000;
   if (!Number.isInteger(n) || n < 0) throw new Error(`bad surfel count ${rest[1]}`);
-  return { out: path.resolve(rest[0]), n, oneMap: flags.has('--one-map'),
+  const capAt = argv.indexOf('--page-cap');
+  const pageCap = capAt >= 0 ? Number(argv[capAt + 1]) : Infinity;
+  return { out: path.resolve(rest[0]), n, pageCap, oneMap: flags.has('--one-map'),
     emptySecond: flags.has('--empty-second'), noKeyframes: flags.has('--no-keyframes') };
 }
 
@@ -68,14 +74,30 @@ function keyframes(dir, poses) {
   return out;
 }
 
-// Writes one page folder with n surfels in the "with fill" map.
+// The surfels a report's page holds of a map of s.count: every one up to `cap`, else `cap` of
+// them evenly spread, as the C++ writer keeps them (apps/map_view.cc ForThePage).
+function forThePage(s, cap) {
+  if (!(s.count > cap)) return s;
+  const keep = [];
+  for (let i = 0; i < s.count; i++) {
+    if (Math.floor(((i + 1) * cap) / s.count) > Math.floor((i * cap) / s.count)) keep.push(i);
+  }
+  const pick = (a, k) => keep.flatMap((i) => Array.from({ length: k }, (_, j) => a[k * i + j]));
+  return { count: keep.length, pos: pick(s.pos, 3), nrm: pick(s.nrm, 3), rgb: pick(s.rgb, 3),
+    radius: pick(s.radius, 1), conf: pick(s.conf, 1), source: pick(s.source, 1) };
+}
+
+// Writes one page folder with n surfels in the "with fill" map (at most opts.pageCap of each map
+// on the page, the total stated).
 function writePage(dir, n, opts, bundle) {
   fs.mkdirSync(dir, { recursive: true });
-  const maps = [mapEntry('with fill', sampleScene(n, true, 11), dir.endsWith('small') ? 4 * n : n)];
+  const withFill = sampleScene(n, true, 11);
+  const maps = [mapEntry('with fill', forThePage(withFill, opts.pageCap),
+    dir.endsWith('small') ? 4 * n : n)];
   if (!opts.oneMap) {
     const without = opts.emptySecond ? { count: 0, pos: [], nrm: [], rgb: [], radius: [], conf: [], source: [] }
       : sampleScene(Math.round(n / 4), false, 12);
-    maps.push(mapEntry('without fill', without, without.count));
+    maps.push(mapEntry('without fill', forThePage(without, opts.pageCap), without.count));
   }
   const poses = cameraPath(120);
   const view = {
