@@ -287,7 +287,7 @@ void AzureKinectMkvSource::ReadTimes(AVFormatContext* context) {
     if (missing_s > 2 * period_s + 0.05) {
       char text[160];
       std::snprintf(text, sizeof(text),
-                    "truncated: its blocks end %.3f s into a recording of %.3f s", 
+                    "truncated: its blocks end %.3f s into a recording of %.3f s",
                     (last_us - start_offset_us_) * 1e-6, context->duration * 1e-6);
       throw InputError(path_, text);
     }
