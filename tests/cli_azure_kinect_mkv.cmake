@@ -7,11 +7,6 @@ include("${CMAKE_CURRENT_LIST_DIR}/run_and_expect.cmake")
 set(tmp "${CMAKE_CURRENT_BINARY_DIR}/cli_azure_kinect_mkv_tmp")
 file(REMOVE_RECURSE "${tmp}")
 file(MAKE_DIRECTORY "${tmp}")
-# run() where a zero exit is expected.
-macro(run_ok)
-  run(${ARGN})
-  expect("${ARGN}" 0 "")
-endmacro()
 # The ATE of `est` against `gt` in metres, into `var`.
 macro(ate gt est var)
   run_ok("${GLASSFUSION}" eval --gt "${gt}" --est "${est}")

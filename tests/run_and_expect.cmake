@@ -20,3 +20,9 @@ function(expect what expected_rc regex)
     message(FATAL_ERROR "${what}: last line '${last}' does not match '${regex}'")
   endif()
 endfunction()
+
+# run() where a zero exit is expected.
+macro(run_ok)
+  run(${ARGN})
+  expect("${ARGN}" 0 "")
+endmacro()
