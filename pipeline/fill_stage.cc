@@ -34,12 +34,17 @@ FillStage::FillStage(const Camera& camera, const FillStageOptions& options, RunS
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
   GF_CHECK(sink != nullptr, "the fill stage needs a sink");
-  worker_.Start("gf-fill", [this] { Run(); });
+  filler_ = std::make_unique<KeyframeFiller>(camera_, options_.Filler());
+  writer_.Start("gf-fill-write", [this] { RunWriting(filler_.get()); });
+  stereo_worker_.Start("gf-stereo", [this] { RunStereo(filler_.get()); });
+  worker_.Start("gf-fill", [this] { RunPairing(filler_.get()); });
 }
 
 FillStage::~FillStage() {
   Cancel();
   worker_.Join();
+  stereo_worker_.Join();
+  writer_.Join();
 }
 
 bool FillStage::Offer(const RgbdFrame& frame, const SE3& world_from_camera, int keyframe,
@@ -62,38 +67,84 @@ bool FillStage::Offer(const RgbdFrame& frame, const SE3& world_from_camera, int 
 
 void FillStage::Finish(const std::function<bool()>& poll) {
   queue_.Close();
-  while (!worker_.WaitFor(std::chrono::milliseconds(50)))
+  while (!writer_.WaitFor(std::chrono::milliseconds(50)))
     if (poll && poll()) Cancel();
   worker_.Join();
-  if (worker_.error()) std::rethrow_exception(worker_.error());
+  stereo_worker_.Join();
+  writer_.Join();
+  for (const StageThread* t : {&writer_, &stereo_worker_, &worker_})
+    if (t->error()) std::rethrow_exception(t->error());
 }
 
 void FillStage::Cancel() {
   cancelled_ = true;
-  queue_.Close();
+  CloseQueues();
 }
 
-void FillStage::Run() {
-  // However the worker ends, the fusion stage stops waiting for its fills.
-  struct Stopped {
-    std::atomic<bool>* flag;
-    FusionStage* fusion;
-    ~Stopped() {
-      *flag = true;
-      if (fusion) fusion->CloseFills();
-    }
-  } stopped{&stopped_, fusion_};
-  KeyframeFiller filler(camera_, options_.Filler());
+void FillStage::CloseQueues() {
+  queue_.Close();
+  paired_.Close();
+  stereo_done_.Close();
+}
+
+void FillStage::RunPairing(KeyframeFiller* filler) {
+  struct Done {  // however it ends, the stereo thread gets no more
+    FillStage* stage;
+    bool ok = false;
+    ~Done() { ok ? stage->paired_.Close() : stage->CloseQueues(); }
+  } done{this};
   Offered item;
   int processed = 0;
   while (!cancelled_ && queue_.Pop(&item)) {
-    if (!item.measured_depth.empty()) measured_of_[item.frame.index] = item.measured_depth;
-    keyframe_of_.push_back(item.keyframe);  // the filler numbers keyframes as they arrive
-    for (const FilledKeyframe& k : filler.Add(item.frame, item.world_from_camera)) Write(k);
-    if (fusion_) fusion_->FillsProcessed(++processed);  // its fills are all offered
+    {
+      std::lock_guard<std::mutex> lock(order_mutex_);
+      if (!item.measured_depth.empty()) measured_of_[item.frame.index] = item.measured_depth;
+      keyframe_of_.push_back(item.keyframe);  // the filler numbers keyframes as they arrive
+    }
+    if (!paired_.Push({filler->Pair(item.frame, item.world_from_camera), ++processed})) break;
   }
-  if (!cancelled_)
-    for (const FilledKeyframe& k : filler.Flush([&] { return cancelled_.load(); })) Write(k);
+  if (!cancelled_) paired_.Push({filler->PairRest(), 0});
+  done.ok = true;
+}
+
+void FillStage::RunStereo(const KeyframeFiller* filler) {
+  struct Done {
+    FillStage* stage;
+    bool ok = false;
+    ~Done() { ok ? stage->stereo_done_.Close() : stage->CloseQueues(); }
+  } done{this};
+  Batch batch;
+  while (!cancelled_ && paired_.Pop(&batch)) {
+    for (FillTask& task : batch.tasks) {
+      if (cancelled_) break;
+      filler->Stereo(&task);
+    }
+    if (!stereo_done_.Push(std::move(batch))) break;
+  }
+  done.ok = true;
+}
+
+void FillStage::RunWriting(KeyframeFiller* filler) {
+  // However the worker ends, the fusion stage stops waiting for its fills, and the other threads
+  // stop.
+  struct Stopped {
+    FillStage* stage;
+    ~Stopped() {
+      stage->stopped_ = true;
+      stage->CloseQueues();
+      if (stage->fusion_) stage->fusion_->CloseFills();
+    }
+  } stopped{this};
+  Batch batch;
+  while (!cancelled_ && stereo_done_.Pop(&batch)) {
+    for (FillTask& task : batch.tasks) {
+      if (cancelled_) break;
+      if (!task.failed && !task.result.key) continue;  // left by a cancel
+      Write(filler->Carry(std::move(task)));
+    }
+    if (fusion_ && batch.processed > 0 && !cancelled_) fusion_->FillsProcessed(batch.processed);
+  }
+  std::lock_guard<std::mutex> lock(order_mutex_);
   measured_of_.clear();  // keyframes left unwritten by a cancel
 }
 
@@ -105,26 +156,33 @@ void FillStage::Write(const FilledKeyframe& k) {
   if (k.partner) spdlog::debug("fill {}: {}", r.timestamp, k.stereo.BriefReport());
   if (r.carried_pixels + r.corrected_pixels > 0)
     spdlog::debug("fill {}: {}", r.timestamp, k.fill.BriefReport());
-  const auto measured = measured_of_.find(k.key->frame.index);
-  if (measured == measured_of_.end()) {
+  cv::Mat measured_depth;
+  int tracker_keyframe = -1;
+  {
+    std::lock_guard<std::mutex> lock(order_mutex_);
+    const auto measured = measured_of_.find(k.key->frame.index);
+    if (measured != measured_of_.end()) {
+      measured_depth = measured->second;
+      measured_of_.erase(measured);
+    }
+    const int id = k.key->id;
+    tracker_keyframe =
+        id >= 0 && id < static_cast<int>(keyframe_of_.size()) && keyframe_of_[id] >= 0
+            ? keyframe_of_[id]
+            : id;
+  }
+  if (measured_depth.empty()) {
     sink_->WriteKeyframe(r.timestamp, k.key->frame, k.fill);  // a write failure stops the stage
   } else {
     // The sensor's pixels as measured; the fill's where it measured nothing.
     RgbdFrame frame = k.key->frame;
-    frame.depth = measured->second;
+    frame.depth = measured_depth;
     CarriedFillResult written = k.fill;
     written.filled_depth = k.fill.filled_depth.clone();
-    measured->second.copyTo(written.filled_depth, written.fill_mask == 0);
-    measured_of_.erase(measured);
+    measured_depth.copyTo(written.filled_depth, written.fill_mask == 0);
     sink_->WriteKeyframe(r.timestamp, frame, written);
   }
-  if (fusion_) {
-    const int id = k.key->id;
-    fusion_->OfferFill(
-        k, id >= 0 && id < static_cast<int>(keyframe_of_.size()) && keyframe_of_[id] >= 0
-               ? keyframe_of_[id]
-               : id);
-  }
+  if (fusion_) fusion_->OfferFill(k, tracker_keyframe);
   std::lock_guard<std::mutex> lock(done_mutex_);
   done_.push_back(r);
   ++done_count_;

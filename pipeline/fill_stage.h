@@ -3,11 +3,15 @@
 //
 // The tracker hands each new keyframe to Offer(): keyframes go into a bounded queue; for live
 // input a keyframe that finds the queue full is dropped from the fill (and counted), so tracking
-// never waits on stereo; for recorded input Offer() waits for room (options.drop_when_busy). The
-// worker runs the KeyframeFiller (sfm/keyframe_filler.h: pairing, stereo, carrying earlier fills)
-// and writes each keyframe's images through the RunSink (run_sink.h), then hands each keyframe's
-// fill to the fusion stage, saying after each keyframe offered that it is processed (the fusion
-// stage joins fills to the map at fixed points of the sequence: fusion_stage.h).
+// never waits on stereo; for recorded input Offer() waits for room (options.drop_when_busy). Three
+// threads run the KeyframeFiller's steps (sfm/keyframe_filler.h), joined by small bounded queues,
+// so that one keyframe's stereo overlaps the next one's pairing and the last one's writing:
+// gf-fill pairs (features, partner, refined poses), gf-stereo fills the holes by stereo,
+// gf-fill-write carries the earlier fills into each keyframe, writes its images through the
+// RunSink (run_sink.h) and hands its fill to the fusion stage, saying after each keyframe offered
+// that it is processed (the fusion stage joins fills to the map at fixed points of the sequence:
+// fusion_stage.h). Each step takes the keyframes in order, so that the outputs do not depend on
+// the threads' timing.
 //
 // Failures are contained per keyframe: one whose features, pairing, stereo or carry throws is
 // skipped with a warning naming it and the reason (its files hold the sensor's depth alone),
@@ -22,6 +26,7 @@
 #include <atomic>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -86,8 +91,10 @@ class FillStage {
   nlohmann::ordered_json Report() const;
   std::vector<KeyframeFill> keyframes() const;
 
-  // CPU seconds the stage's own thread used, once it has ended.
-  double cpu_seconds() const { return worker_.cpu_seconds(); }
+  // CPU seconds the stage's own threads used, once they have ended.
+  double cpu_seconds() const {
+    return worker_.cpu_seconds() + stereo_worker_.cpu_seconds() + writer_.cpu_seconds();
+  }
 
  private:
   struct Offered {
@@ -96,7 +103,17 @@ class FillStage {
     int keyframe = -1;
     cv::Mat measured_depth;  // empty: frame.depth is as measured
   };
-  void Run();
+  // Keyframes between the threads; after them, the fills of the first `processed` keyframes
+  // offered are all out (0: not a point to say so).
+  struct Batch {
+    std::vector<FillTask> tasks;
+    int processed = 0;
+  };
+  void RunPairing(KeyframeFiller* filler);
+  void RunStereo(const KeyframeFiller* filler);
+  void RunWriting(KeyframeFiller* filler);
+  // A thread that ends with an error stops the others (and Offer()).
+  void CloseQueues();
   void Write(const FilledKeyframe& k);
 
   Camera camera_;
@@ -104,6 +121,9 @@ class FillStage {
   RunSink* sink_;
   FusionStage* fusion_;
   BoundedQueue<Offered> queue_;
+  BoundedQueue<Batch> paired_{2}, stereo_done_{2};
+  std::unique_ptr<KeyframeFiller> filler_;
+  std::mutex order_mutex_;  // keyframe_of_ and measured_of_ (gf-fill adds, gf-fill-write reads)
   std::vector<int> keyframe_of_;  // the filler's keyframe ids (arrival order) -> the tracker's
   std::map<int, cv::Mat> measured_of_;  // frame index -> measured depth, until it is written
   mutable std::mutex done_mutex_;
@@ -114,7 +134,7 @@ class FillStage {
   int not_filled_ = 0;            // offered after the stage stopped (producer)
   std::atomic<bool> cancelled_{false};
   std::atomic<bool> stopped_{false};  // the worker ended (error or Cancel())
-  StageThread worker_;
+  StageThread worker_, stereo_worker_, writer_;
 };
 
 }  // namespace gf

@@ -41,8 +41,8 @@ KeyframeFiller::KeyframeFiller(const Camera& camera, const KeyframeFillerOptions
   GF_CHECK(options.Check(&problem), problem);
 }
 
-std::vector<FilledKeyframe> KeyframeFiller::Add(const RgbdFrame& frame,
-                                                const SE3& world_from_camera) {
+std::vector<FillTask> KeyframeFiller::Pair(const RgbdFrame& frame,
+                                           const SE3& world_from_camera) {
   const auto t0 = Clock::now();
   std::vector<StereoJob> jobs;
   try {
@@ -52,26 +52,49 @@ std::vector<FilledKeyframe> KeyframeFiller::Add(const RgbdFrame& frame,
     auto key = std::make_shared<StereoKeyframe>();
     key->frame = frame;
     key->world_from_camera = world_from_camera;
-    return {Failed(key, std::string("features: ") + e.what())};
+    std::vector<FillTask> failed(1);
+    failed[0].result = Failed(key, std::string("features: ") + e.what());
+    failed[0].failed = true;
+    return failed;
   }
   last_pairing_ms_ = Ms(t0, Clock::now());
+  std::vector<FillTask> tasks(jobs.size());
+  for (size_t i = 0; i < jobs.size(); ++i) tasks[i].job = std::move(jobs[i]);
+  return tasks;
+}
+
+std::vector<FillTask> KeyframeFiller::PairRest() {
+  std::vector<StereoJob> jobs = scheduler_.Flush();
+  std::vector<FillTask> tasks(jobs.size());
+  for (size_t i = 0; i < jobs.size(); ++i) tasks[i].job = std::move(jobs[i]);
+  return tasks;
+}
+
+std::vector<FilledKeyframe> KeyframeFiller::Add(const RgbdFrame& frame,
+                                                const SE3& world_from_camera) {
   std::vector<FilledKeyframe> out;
-  for (const StereoJob& job : jobs) out.push_back(Fill(job));
+  for (FillTask& task : Pair(frame, world_from_camera)) {
+    Stereo(&task);
+    out.push_back(Carry(std::move(task)));
+  }
   return out;
 }
 
 std::vector<FilledKeyframe> KeyframeFiller::Flush(const std::function<bool()>& stop) {
   std::vector<FilledKeyframe> out;
-  for (const StereoJob& job : scheduler_.Flush()) {
+  for (FillTask& task : PairRest()) {
     if (stop && stop()) break;
-    out.push_back(Fill(job));
+    Stereo(&task);
+    out.push_back(Carry(std::move(task)));
   }
   return out;
 }
 
-FilledKeyframe KeyframeFiller::Fill(const StereoJob& job) {
+void KeyframeFiller::Stereo(FillTask* task) const {
+  if (task->failed) return;
+  const StereoJob& job = task->job;
   const RgbdFrame& key1 = job.key1->frame;
-  FilledKeyframe out;
+  FilledKeyframe& out = task->result;
   out.key = job.key1;
   KeyframeFill& k = out.record;
   k.timestamp = KeyframeName(key1);
@@ -108,14 +131,26 @@ FilledKeyframe KeyframeFiller::Fill(const StereoJob& job) {
     } else {
       k.termination = job.choice.reason;
     }
-    const auto t1 = Clock::now();
-    // The earlier keyframes' own fills, moved into this keyframe.
-    out.fill = carrier_.Next(key1, job.key1->world_from_camera, job.key2 ? &out.stereo : nullptr);
-    out.stereo_ms = Ms(t0, t1);
-    out.carry_ms = Ms(t1, Clock::now());
+    out.stereo_ms = Ms(t0, Clock::now());
   } catch (const std::exception& e) {
-    return Failed(job.key1, e.what());
+    task->result = Failed(job.key1, e.what());
+    task->failed = true;
   }
+}
+
+FilledKeyframe KeyframeFiller::Carry(FillTask task) {
+  if (task.failed) return std::move(task.result);
+  FilledKeyframe out = std::move(task.result);
+  try {
+    const auto t0 = Clock::now();
+    // The earlier keyframes' own fills, moved into this keyframe.
+    out.fill = carrier_.Next(out.key->frame, out.key->world_from_camera,
+                             out.partner ? &out.stereo : nullptr);
+    out.carry_ms = Ms(t0, Clock::now());
+  } catch (const std::exception& e) {
+    return Failed(out.key, e.what());
+  }
+  KeyframeFill& k = out.record;
   k.filled_pixels = out.fill.filled_pixels;
   k.carried_pixels = out.fill.carried_pixels;
   k.corrected_pixels = out.fill.corrected_pixels;
@@ -126,7 +161,7 @@ FilledKeyframe KeyframeFiller::Fill(const StereoJob& job) {
 }
 
 FilledKeyframe KeyframeFiller::Failed(std::shared_ptr<const StereoKeyframe> key,
-                                      const std::string& reason) const {
+                                      const std::string& reason) {
   FilledKeyframe out;
   const RgbdFrame& frame = key->frame;
   out.key = std::move(key);

@@ -72,6 +72,14 @@ struct FilledKeyframe {
   double stereo_ms = 0, carry_ms = 0;
 };
 
+// A keyframe between the steps of KeyframeFiller::Add(), for callers that run them on threads
+// of their own.
+struct FillTask {
+  StereoJob job;          // Pair()'s
+  FilledKeyframe result;  // Stereo() sets key, partner, record and stereo; Carry() the rest
+  bool failed = false;    // `result` is final (Failed): the later steps pass it on
+};
+
 class KeyframeFiller {
  public:
   // Throws std::logic_error when options.Check() fails.
@@ -85,9 +93,18 @@ class KeyframeFiller {
   // Milliseconds the last Add() spent on features and pairing (pose refinement included).
   double last_pairing_ms() const { return last_pairing_ms_; }
 
+  // Add() and Flush() in three steps: Pair() (or PairRest(), at the end), Stereo(), Carry(), each
+  // step taking the tasks in the order the one before gave them. The steps use different parts
+  // of the filler, so that three threads may run them at once (one thread per step); Stereo()
+  // reads only the options.
+  std::vector<FillTask> Pair(const RgbdFrame& frame, const SE3& world_from_camera);
+  std::vector<FillTask> PairRest();
+  void Stereo(FillTask* task) const;
+  FilledKeyframe Carry(FillTask task);
+
  private:
-  FilledKeyframe Fill(const StereoJob& job);
-  FilledKeyframe Failed(std::shared_ptr<const StereoKeyframe> key, const std::string& reason) const;
+  static FilledKeyframe Failed(std::shared_ptr<const StereoKeyframe> key,
+                               const std::string& reason);
 
   Camera camera_;
   KeyframeFillerOptions options_;
