@@ -147,11 +147,13 @@ void LoopClosureStage::Process(const LoopKeyframeItem& item) {
   std::shared_ptr<const LoopKeyframe> key =
       MakeLoopKeyframe(item.id, item.frame, item.world_from_camera, item.features);
   const SE3 estimate = AddNode(item, key->median_depth_m);
+  const std::set<int> tied = graph_.NodesWithin(item.id, options_.detector.recent_keyframes);
   LoopDetection detection;
   {
     std::shared_lock<std::shared_mutex> lock(database_mutex_);
-    detection =
-        detector_.Detect(*key, estimate, database_, [&](int id) { return graph_.pose(id); });
+    detection = detector_.Detect(
+        *key, estimate, database_, [&](int id) { return graph_.pose(id); },
+        [&](int id) { return tied.count(id) != 0; });
   }
   bool stored_place = false;
   for (const PoseGraphEdge& e : detection.accepted) {

@@ -205,21 +205,22 @@ LoopDetector::LoopDetector(const Camera& camera, const LoopDetectorOptions& opti
 
 std::vector<LoopCandidate> LoopDetector::Candidates(
     const LoopKeyframe& query, const SE3& query_estimate, const KeyframeDatabase& database,
-    const std::function<SE3(int)>& estimate) const {
+    const std::function<SE3(int)>& estimate, const std::function<bool(int)>& tied) const {
   const int newest_allowed = query.id - options_.recent_keyframes - 1;
+  const auto allowed = [&](int id) { return id <= newest_allowed && !(tied && tied(id)); };
   std::vector<LoopCandidate> out;
   auto chosen = [&](int id) {
     return std::any_of(out.begin(), out.end(), [&](const LoopCandidate& c) { return c.id == id; });
   };
   for (const KeyframeDatabase::Match& m :
        database.QueryAppearance(query.features->descriptors, options_.appearance_candidates,
-                                [&](int id) { return id <= newest_allowed; }))
+                                allowed))
     if (m.score >= options_.min_appearance_score)
       out.push_back({m.id, "appearance", m.score, {}, ""});
   std::vector<std::pair<double, int>> near;
   const Eigen::Vector3d axis = query_estimate.RotationMatrix().col(2);
   for (const auto& k : database.keyframes()) {
-    if (k->id > newest_allowed || chosen(k->id)) continue;
+    if (!allowed(k->id) || chosen(k->id)) continue;
     const SE3 e = estimate(k->id);
     const double distance = (e.translation() - query_estimate.translation()).norm();
     const double angle =
@@ -235,9 +236,10 @@ std::vector<LoopCandidate> LoopDetector::Candidates(
 
 LoopDetection LoopDetector::Detect(const LoopKeyframe& query, const SE3& query_estimate,
                                    const KeyframeDatabase& database,
-                                   const std::function<SE3(int)>& estimate) {
+                                   const std::function<SE3(int)>& estimate,
+                                   const std::function<bool(int)>& tied) {
   LoopDetection d;
-  d.candidates = Candidates(query, query_estimate, database, estimate);
+  d.candidates = Candidates(query, query_estimate, database, estimate, tied);
   struct Disagreeing {
     LoopCandidate* candidate;
     PoseGraphEdge edge;

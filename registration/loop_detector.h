@@ -82,7 +82,11 @@ LoopVerification VerifyLoop(const LoopKeyframe& query, const LoopKeyframe& candi
                             const Camera& camera, const LoopVerificationOptions& options);
 
 struct LoopDetectorOptions {
-  int recent_keyframes = 8;        // the keyframes just before the query are no candidates
+  // The keyframes just before the query are no candidates, nor, where Detect() is given the
+  // graph's neighbourhood, keyframes this many edges or fewer from the query in the pose graph
+  // (tracking, or an earlier loop of a keyframe just before it, already ties them to it: a loop to
+  // them repeats what the graph holds, and cannot correct drift that a short chain has not got).
+  int recent_keyframes = 8;
   int appearance_candidates = 3;   // best appearance scores verified per keyframe
   double min_appearance_score = 0.05;  // histogram intersection, 0-1
   int proximity_candidates = 2;    // nearest by pose verified per keyframe (not already chosen)
@@ -118,15 +122,18 @@ class LoopDetector {
   // Throws std::logic_error when options.Check() fails.
   LoopDetector(const Camera& camera, const LoopDetectorOptions& options);
   // `query` is not in `database` yet; estimate(id) gives the current world_from_camera estimate
-  // of a database keyframe, query_estimate the query's.
+  // of a database keyframe, query_estimate the query's; tied(id) (may be empty) is true for the
+  // keyframes within recent_keyframes edges of the query in the pose graph (not verified).
   LoopDetection Detect(const LoopKeyframe& query, const SE3& query_estimate,
                        const KeyframeDatabase& database,
-                       const std::function<SE3(int)>& estimate);
+                       const std::function<SE3(int)>& estimate,
+                       const std::function<bool(int)>& tied = {});
 
  private:
   std::vector<LoopCandidate> Candidates(const LoopKeyframe& query, const SE3& query_estimate,
                                         const KeyframeDatabase& database,
-                                        const std::function<SE3(int)>& estimate) const;
+                                        const std::function<SE3(int)>& estimate,
+                                        const std::function<bool(int)>& tied) const;
   // Verified loops that disagree with the graph, kept until consecutive keyframes confirm them.
   struct Pending {
     int query = -1;

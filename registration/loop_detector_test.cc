@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <set>
 #include <opencv2/imgproc.hpp>
 
 #include "datasets/synth.h"
@@ -127,7 +128,9 @@ TEST_F(LoopScene, FindsTheStartByAppearanceAndWaitsForConsistentCorrections) {
     ASSERT_FALSE(matches.empty());
     // The synthetic scene's textures repeat around the table, so appearance alone ranks the
     // start first only on the last frame; verification sorts the rest out.
-    if (i == 59) EXPECT_LE(matches.front().id, 1) << "looks most like " << matches.front().id;
+    if (i == 59) {
+      EXPECT_LE(matches.front().id, 1) << "looks most like " << matches.front().id;
+    }
     detections.push_back(detector.Detect(*query, query->world_from_camera, database, estimate));
   }
   EXPECT_TRUE(detections[0].accepted.empty()) << detections[0].BriefReport();
@@ -147,6 +150,20 @@ TEST_F(LoopScene, FindsTheStartByAppearanceAndWaitsForConsistentCorrections) {
   const LoopDetection d = fresh.Detect(*query, query->world_from_camera, database, estimate);
   EXPECT_FALSE(d.accepted.empty()) << d.BriefReport();
   EXPECT_FALSE(d.consistent_correction);
+  // Keyframes the pose graph already ties to the query are no candidates: with all of them tied,
+  // nothing is verified; with all but the ones just accepted, only those are.
+  const auto again = Keyframe(id++, 58, (*poses_)[58]);
+  const LoopDetection all_tied = fresh.Detect(*again, again->world_from_camera, database,
+                                              estimate, [](int) { return true; });
+  EXPECT_TRUE(all_tied.candidates.empty()) << all_tied.BriefReport();
+  std::set<int> accepted;
+  for (const PoseGraphEdge& e : d.accepted) accepted.insert(e.from);
+  const auto third = Keyframe(id++, 58, (*poses_)[58]);
+  const LoopDetection some_tied =
+      fresh.Detect(*third, third->world_from_camera, database, estimate,
+                   [&](int k) { return accepted.count(k) == 0; });
+  EXPECT_FALSE(some_tied.accepted.empty()) << some_tied.BriefReport();
+  for (const LoopCandidate& c : some_tied.candidates) EXPECT_EQ(accepted.count(c.id), 1u) << c.id;
 }
 
 }  // namespace

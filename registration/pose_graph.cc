@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <map>
+#include <vector>
 
 #include "acquisition/bounds.h"
 #include "acquisition/errors.h"
@@ -109,6 +111,25 @@ const SE3& PoseGraph::pose(int id) const {
 void PoseGraph::Hold(int id) {
   GF_CHECK(HasNode(id), "no such pose-graph node");
   held_.insert(id);
+}
+
+std::set<int> PoseGraph::NodesWithin(int id, int max_edges) const {
+  std::map<int, std::vector<int>> neighbours;
+  for (const PoseGraphEdge& e : edges_) {
+    if (e.rejected || e.kind == PoseGraphEdge::Kind::kGap) continue;
+    neighbours[e.from].push_back(e.to);
+    neighbours[e.to].push_back(e.from);
+  }
+  std::set<int> reached = {id};
+  std::vector<int> ring = {id};
+  for (int step = 0; step < max_edges && !ring.empty(); ++step) {
+    std::vector<int> next;
+    for (int node : ring)
+      for (int n : neighbours[node])
+        if (reached.insert(n).second) next.push_back(n);
+    ring = std::move(next);
+  }
+  return reached;
 }
 
 void PoseGraph::SetPose(int id, const SE3& world_from_node) {

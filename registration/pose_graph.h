@@ -127,6 +127,9 @@ class PoseGraph {
   PoseGraphSummary Optimize(const PoseGraphOptions& options);
   // Whitened squared residual of an edge at the current estimates.
   double Chi2(const PoseGraphEdge& edge) const;
+  // The nodes at most `max_edges` edges from `id` (itself included), through the edges that
+  // measure a relative pose (odometry, relocalisation and loops the graph kept; not gap guesses).
+  std::set<int> NodesWithin(int id, int max_edges) const;
 
  private:
   // Ceres parameter blocks: quaternion (x, y, z, w) and translation per node.

@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <random>
+#include <set>
 
 #include "registration/pose_graph_cost.h"
 
@@ -205,6 +206,23 @@ TEST(PoseGraph, RefusesEdgesToMissingNodes) {
   PoseGraphOptions bad;
   bad.max_loop_chi2 = 0;
   EXPECT_FALSE(bad.Check());
+}
+
+TEST(PoseGraph, NodesWithinFollowMeasuredEdgesOnly) {
+  PoseGraph graph;
+  for (int id = 0; id < 8; ++id) graph.AddNode(id, SE3());
+  using Kind = PoseGraphEdge::Kind;
+  for (int id = 1; id < 6; ++id) graph.AddEdge({id - 1, id, SE3(), Matrix6d::Identity()});
+  graph.AddEdge({0, 5, SE3(), Matrix6d::Identity(), Kind::kLoop});   // a loop back to the start
+  graph.AddEdge({5, 6, SE3(), Matrix6d::Identity(), Kind::kGap});    // a guess: not followed
+  PoseGraphEdge rejected{2, 7, SE3(), Matrix6d::Identity(), Kind::kLoop};
+  rejected.rejected = true;                                          // refused: not followed
+  graph.AddEdge(rejected);
+  EXPECT_EQ(graph.NodesWithin(5, 0), (std::set<int>{5}));
+  EXPECT_EQ(graph.NodesWithin(5, 1), (std::set<int>{0, 4, 5}));
+  EXPECT_EQ(graph.NodesWithin(5, 2), (std::set<int>{0, 1, 3, 4, 5}));
+  EXPECT_EQ(graph.NodesWithin(2, 8), (std::set<int>{0, 1, 2, 3, 4, 5}));
+  EXPECT_EQ(graph.NodesWithin(6, 3), (std::set<int>{6}));
 }
 
 }  // namespace
