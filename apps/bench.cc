@@ -5,9 +5,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/core/utility.hpp>
@@ -19,6 +21,7 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/stats.h"
+#include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
 #include "apps/bench_fusion.h"
 #include "apps/progress.h"
@@ -194,16 +197,28 @@ MethodResult TrackFramesToModel(const std::vector<RgbdFrame>& frames, const Came
 
 // The pipeline in-process (its stage threads) on the frames in memory, as reconstruct runs it
 // with `pipeline` (the whole of it, or tracking with loop closure alone): the trajectory it
-// writes, ms per frame of the whole run, and its report.json. *peak_added_mib: the most resident
-// memory the run held above what the process held before it (sampled every 50 ms).
+// writes, ms per frame of the whole run, and its report.json. With `to_disk` the outputs are
+// written as reconstruct writes them (PNG, PLY, reports), into a temporary run folder removed
+// afterwards; else kept in memory. *peak_added_mib: the most resident memory the run held above
+// what the process held before it (sampled every 50 ms).
 nlohmann::ordered_json BenchPipeline(const std::vector<RgbdFrame>& frames,
                                      const CameraFile& camera, ReconstructionOptions pipeline,
                                      const std::string& name, MethodResult* result,
-                                     double* peak_added_mib) {
+                                     double* peak_added_mib, bool to_disk = false) {
   pipeline.first_frame = 0;
   pipeline.end_frame = -1;
   InMemoryFrameSource source(camera, frames);
-  InMemoryRunSink sink;
+  InMemoryRunSink in_memory;
+  std::string folder;
+  std::unique_ptr<FolderRunSink> on_disk;
+  if (to_disk) {
+    std::string pattern =
+        (std::filesystem::temp_directory_path() / "glassfusion-bench-XXXXXX").string();
+    GF_CHECK(mkdtemp(pattern.data()) != nullptr, "bench: cannot make a temporary folder");
+    folder = pattern;
+    on_disk = std::make_unique<FolderRunSink>(folder, RunFolder::Options{});
+  }
+  RunSink& sink = on_disk ? static_cast<RunSink&>(*on_disk) : in_memory;
   TerminalProgress progress("bench: " + name, static_cast<int>(frames.size()));
   const double before_mib = ResidentMiB();
   double peak_mib = before_mib;
@@ -215,7 +230,14 @@ nlohmann::ordered_json BenchPipeline(const std::vector<RgbdFrame>& frames,
   const ReconstructionSummary s = Reconstruction(pipeline).Run(source, &sink, callbacks);
   if (peak_added_mib) *peak_added_mib = std::max(peak_mib, ResidentMiB()) - before_mib;
   result->name = name;
-  result->trajectory = sink.trajectory;
+  if (on_disk) {
+    on_disk.reset();
+    result->trajectory = ReadTumTrajectory(folder + "/trajectory.txt");
+    std::error_code ignored;
+    std::filesystem::remove_all(folder, ignored);  // the folder this call made
+  } else {
+    result->trajectory = in_memory.trajectory;
+  }
   result->ms.assign(frames.size(), 1000.0 * s.seconds / frames.size());
   result->failures = s.lost;
   return s.report;
@@ -237,15 +259,15 @@ nlohmann::ordered_json BenchLoopClosure(const std::vector<RgbdFrame>& frames,
 }
 
 // The whole reconstruction as `reconstruct` runs it by default (fill, fusion, loop closure, the
-// map's completion of the keyframes; outputs kept in memory): frames per second end to end, the
-// CPU seconds of each stage and the cores used, and the memory the run added.
+// map's completion of the keyframes; outputs written to a temporary folder): frames per second
+// end to end, the CPU seconds of each stage and the cores used, and the memory the run added.
 nlohmann::ordered_json BenchEndToEnd(const std::vector<RgbdFrame>& frames,
                                      const CameraFile& camera, const BenchOptions& options,
                                      MethodResult* result) {
   double peak_added_mib = 0;
   const nlohmann::ordered_json report =
       BenchPipeline(frames, camera, options.pipeline, "glassfusion end to end (reconstruct)",
-                    result, &peak_added_mib);
+                    result, &peak_added_mib, true);
   nlohmann::ordered_json out;
   out["fps"] = report["fps"];
   out["seconds"] = report["seconds"];

@@ -243,6 +243,11 @@ void FusionStage::ApplyCorrections(std::map<int, SE3> latest, int version) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
 }
 
+void FusionStage::PrepareRenders() {
+  GF_CHECK(!maps_.empty(), "fusion stage: no map to render");
+  maps_.front().fusion.SettleChunks();
+}
+
 MapCompletion FusionStage::RenderFills(const SE3& world_from_camera) {
   GF_CHECK(!maps_.empty(), "fusion stage: no map to render");
   const double margin = options_.fusion.free_space_margin;

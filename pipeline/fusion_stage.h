@@ -150,7 +150,10 @@ class FusionStage {
   // final corrections): its depth where the nearest stable surfel is a fill, gaps between the
   // fill discs closed (completion_max_gap_px), kept where the surface is confirmed from that side
   // (completion_max_angle_deg, completion_min_support), with its confidence.
+  // Several threads may call it at once once PrepareRenders() has run (the map no longer
+  // changes after Finish()).
   MapCompletion RenderFills(const SE3& world_from_camera);
+  void PrepareRenders();
 
   // CPU seconds the stage's own thread used, once it has ended.
   double cpu_seconds() const { return worker_.cpu_seconds(); }

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <map>
@@ -143,10 +144,36 @@ Trajectory CorrectedTrajectory(const TrackingRecord& tracking, const PoseCorrect
   return out;
 }
 
+// One keyframe's completion from the map (CompleteFromMap).
+struct KeyframeCompletion {
+  bool done = false;      // asked for (a stop leaves the rest undone)
+  int completed = 0;      // pixels
+  int glass = 0;          // pixels the map's transparent surfels cover
+  std::string warning;    // why it could not be completed
+};
+
+KeyframeCompletion CompleteOne(const KeyframeFill& k, const std::map<std::string, SE3>& poses,
+                               FusionStage* fusion, RunSink* sink) {
+  KeyframeCompletion out;
+  out.done = true;
+  const auto pose = poses.find(k.timestamp);
+  if (!k.failure.empty() || pose == poses.end()) return out;
+  try {
+    const MapCompletion offer = fusion->RenderFills(pose->second);
+    out.glass = offer.glass.empty() ? 0 : cv::countNonZero(offer.glass);
+    out.completed = sink->CompleteKeyframe(k.timestamp, offer);
+  } catch (const std::exception& e) {
+    out.warning = "keyframe " + k.timestamp + " not completed from the model: " + e.what();
+  }
+  return out;
+}
+
 // Each filled keyframe's holes that its own fill left empty, completed from the final model's
-// fills at the keyframe's final pose. A keyframe that cannot be completed stays as its fill left
-// it (a warning); the others go on. `stop` is asked before each keyframe (true: the rest stay as
-// they are). report.json's fill.model_completion.
+// fills at the keyframe's final pose, on every core (the keyframes are independent, so the
+// outputs do not depend on which thread did which). A keyframe that cannot be completed stays as
+// its fill left it (a warning); the others go on. `stop` is asked on this thread between its
+// keyframes (true: the keyframes not started stay as they are). report.json's
+// fill.model_completion.
 json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajectory& trajectory,
                      const std::vector<std::string>& names, RunSink* sink,
                      const std::function<bool()>& stop, std::vector<std::string>* warnings) {
@@ -155,26 +182,39 @@ json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajector
     poses[names[i]] = trajectory[i].world_from_camera;
   const auto start = Clock::now();
   const std::vector<KeyframeFill> keyframes_filled = fill.keyframes();
+  std::vector<std::string> to_complete;
+  for (const KeyframeFill& k : keyframes_filled)
+    if (k.failure.empty() && poses.count(k.timestamp)) to_complete.push_back(k.timestamp);
+  sink->PrepareCompletion(to_complete);
+  fusion->PrepareRenders();
+  std::vector<KeyframeCompletion> results(keyframes_filled.size());
+  std::atomic<size_t> next{0};
+  std::atomic<bool> stopped{false};
+  auto work = [&](bool asks) {
+    while (!(asks && stop() && (stopped = true)) && !stopped) {
+      const size_t i = next++;
+      if (i >= results.size()) return;
+      results[i] = CompleteOne(keyframes_filled[i], poses, fusion, sink);
+    }
+  };
+  const size_t helpers =
+      std::min<size_t>({std::max(1u, std::thread::hardware_concurrency()) - 1, 7,
+                        results.size()});
+  std::vector<std::thread> threads;
+  for (size_t t = 0; t < helpers; ++t) threads.emplace_back(work, false);
+  work(true);
+  for (std::thread& t : threads) t.join();
   int keyframes = 0, done = 0, glass_keyframes = 0;
   long pixels = 0, glass_pixels = 0;
-  bool stopped = false;
-  for (const KeyframeFill& k : keyframes_filled) {
-    if ((stopped = stop())) break;
-    ++done;
-    const auto pose = poses.find(k.timestamp);
-    if (!k.failure.empty() || pose == poses.end()) continue;
-    try {
-      const MapCompletion offer = fusion->RenderFills(pose->second);
-      const int glass = offer.glass.empty() ? 0 : cv::countNonZero(offer.glass);
-      glass_keyframes += glass > 0;
-      glass_pixels += glass;
-      const int completed = sink->CompleteKeyframe(k.timestamp, offer);
-      keyframes += completed > 0;
-      pixels += completed;
-    } catch (const std::exception& e) {
-      warnings->push_back("keyframe " + k.timestamp + " not completed from the model: " + e.what());
-      spdlog::warn("{}", warnings->back());
-    }
+  for (const KeyframeCompletion& r : results) {
+    done += r.done;
+    keyframes += r.completed > 0;
+    pixels += r.completed;
+    glass_keyframes += r.glass > 0;
+    glass_pixels += r.glass;
+    if (r.warning.empty()) continue;
+    warnings->push_back(r.warning);
+    spdlog::warn("{}", r.warning);
   }
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   spdlog::info("model completion: {} hole pixels of {} keyframes from the map's fills, {:.1f} s",
@@ -182,7 +222,7 @@ json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajector
   return {{"keyframes", keyframes},
           {"pixels", pixels},
           {"seconds", seconds},
-          {"stopped", stopped},
+          {"stopped", stopped.load()},
           {"keyframes_done", done},
           {"keyframes_to_do", static_cast<int>(keyframes_filled.size())},
           {"glass_keyframes", glass_keyframes},
@@ -457,6 +497,11 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   WriteOutputs(*s, sink, without_fill, summary);
   phase = "map completion";
   if (summary.complete) CompleteKeyframes(*s, sink, poll, stop_reason, &summary);
+  // The whole run, the map's completion of the keyframes included.
+  summary.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  summary.fps = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
+  summary.report["seconds"] = summary.seconds;
+  summary.report["fps"] = summary.fps;
   WriteFinalReports(callbacks, sink, without_fill, &summary);
   poll();
   if (error) std::rethrow_exception(error);

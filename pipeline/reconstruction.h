@@ -112,7 +112,8 @@ struct ReconstructionSummary {
   long hole_pixels = 0;  // in keyframes handed to the fill
   long filled_pixels = 0;
   long surfels = 0;        // in map.ply
-  double seconds = 0;      // the whole run, the fill's tail after tracking included
+  double seconds = 0;      // the whole run: the fill's tail after tracking and the map's
+                           // completion of the keyframes included
   double fps = 0;          // frames / seconds
   bool most_lost = false;  // tracking was lost on more than kMostFramesLost of the frames
   std::vector<std::string> warnings;           // also in the report

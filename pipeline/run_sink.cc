@@ -160,6 +160,12 @@ cv::Mat FolderRunSink::Undistort(const cv::Mat& image, int interpolation) const 
   return out;
 }
 
+void FolderRunSink::PrepareCompletion(const std::vector<std::string>& names) {
+  for (const std::string& name : names)
+    for (const char* suffix : {".glass_mask.png", ".model_fill.png"})
+      File("keyframes/" + name + suffix);
+}
+
 int FolderRunSink::CompleteKeyframe(const std::string& name, const MapCompletion& offer) {
   std::string pinhole_file;
   {
@@ -260,12 +266,16 @@ void InMemoryRunSink::WriteMap(const std::vector<Surfel>& surfels) {
 void InMemoryRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& frame,
                                     const CarriedFillResult& fill) {
   std::lock_guard<std::mutex> lock(mutex_);
-  keyframes[name] = {frame, fill, cv::Mat()};
+  keyframes[name] = {frame, fill, cv::Mat(), cv::Mat()};
 }
 
 int InMemoryRunSink::CompleteKeyframe(const std::string& name, const MapCompletion& offer) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  Keyframe& k = keyframes.at(name);
+  Keyframe* found = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    found = &keyframes.at(name);  // (a map's elements stay where they are)
+  }
+  Keyframe& k = *found;  // one thread completes one keyframe
   k.glass_mask = offer.glass.clone();
   k.fill.filled_depth = k.fill.filled_depth.clone();  // (it may share pixels with the fill's)
   cv::Mat* confidence = nullptr;

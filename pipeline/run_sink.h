@@ -74,7 +74,10 @@ class RunSink {
   // it (CompleteFromModel), with the offer's confidence. Returns the pixels completed. Throws
   // InputError when the keyframe cannot be read back or rewritten, std::out_of_range when no
   // keyframe of that name was written.
+  // Several threads may complete different keyframes at once, after PrepareCompletion() named
+  // them all (in the order the outputs should list them).
   virtual int CompleteKeyframe(const std::string& name, const MapCompletion& offer) = 0;
+  virtual void PrepareCompletion(const std::vector<std::string>& names) { (void)names; }
   // Where the outputs go, for messages ("memory" for the in-memory sink).
   virtual std::string Where() const = 0;
 };
@@ -104,6 +107,9 @@ class FolderRunSink : public RunSink {
   // Rewrites <name>.depth_filled.png and the pinhole depth, and writes <name>.model_fill.png (255
   // where the model completed the keyframe) and, when the offer has one, <name>.glass_mask.png.
   int CompleteKeyframe(const std::string& name, const MapCompletion& offer) override;
+  // Claims the files the completion may add, in this order (the run folder's list of its files
+  // then comes out the same on every run, whichever thread writes first).
+  void PrepareCompletion(const std::vector<std::string>& names) override;
   std::string Where() const override { return out_dir_; }
 
  private:

@@ -230,6 +230,10 @@ class SurfelFusion {
   // the nearest surfel's facing, and the support of the surface within support_margin (a
   // relative depth) of it.
   MapView RenderView(const SE3& world_from_camera, double support_margin);
+  // Brings the culling chunks up to date with the map (the renders above do it first). After it,
+  // and while the map does not change, RenderDepth and RenderView may run on several threads at
+  // once (they then only read the map).
+  void SettleChunks();
   // Moves every surfel with the keyframe it belongs to (Surfel::keyframe): by
   // world_correction_of_keyframe[k] (a transform of the world applied on the left), the last entry
   // for keyframes beyond the list; surfels of no keyframe (-1) stay. For a pose-graph correction.
@@ -317,7 +321,9 @@ class SurfelFusion {
     chunk.settled = false;
     if (!chunk.dirty) chunk.Include(map_[surfel]);  // (dirty: recomputed before its next use)
   }
-  bool ChunkVisible(size_t chunk, const SE3& camera_from_world);
+  // Recomputes a dirty chunk's bounds.
+  void RefreshChunk(size_t chunk);
+  bool ChunkVisible(size_t chunk, const SE3& camera_from_world) const;
   // Calls visit(surfel, its normal in the camera, the pixel's ray (x/z, y/z, 1), x, y, depth) for
   // every pixel a stable surfel's disc covers (RenderDepth's discs).
   template <typename Visit>

@@ -19,17 +19,27 @@ uint64_t Pack(float z, uint32_t index) {
 
 }  // namespace
 
-bool SurfelFusion::ChunkVisible(size_t c, const SE3& camera_from_world) {
+void SurfelFusion::RefreshChunk(size_t c) {
   Chunk& chunk = chunks_[c];
-  if (chunk.dirty) {
-    chunk.lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());  // empty
-    chunk.hi = -chunk.lo;
-    chunk.largest = 0;
-    const size_t end = std::min(map_.size(), (c + 1) * kChunk);
-    for (size_t i = c * kChunk; i < end; ++i)
-      if (!map_[i].removed()) chunk.Include(map_[i]);
-    chunk.dirty = false;
-  }
+  if (!chunk.dirty) return;
+  chunk.lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());  // empty
+  chunk.hi = -chunk.lo;
+  chunk.largest = 0;
+  const size_t end = std::min(map_.size(), (c + 1) * kChunk);
+  for (size_t i = c * kChunk; i < end; ++i)
+    if (!map_[i].removed()) chunk.Include(map_[i]);
+  chunk.dirty = false;
+}
+
+void SurfelFusion::SettleChunks() {
+  const size_t needed = (map_.size() + kChunk - 1) / kChunk;
+  if (chunks_.size() != needed) chunks_.resize(needed);
+  for (size_t c = 0; c < chunks_.size(); ++c)
+    if (chunks_[c].dirty) RefreshChunk(c);
+}
+
+bool SurfelFusion::ChunkVisible(size_t c, const SE3& camera_from_world) const {
+  const Chunk& chunk = chunks_[c];
   if (chunk.lo.x() > chunk.hi.x()) return false;  // all removed
   const Eigen::Vector3f centre = 0.5f * (chunk.lo + chunk.hi);
   const Eigen::Vector3f q = (camera_from_world * centre.cast<double>()).cast<float>();
@@ -54,7 +64,10 @@ void SurfelFusion::ProjectMap(const SE3& camera_from_world) {
   std::vector<uint8_t>& in_view = in_view_;
   in_view.resize(chunks);
   cv::parallel_for_(cv::Range(0, chunks), [&](const cv::Range& range) {
-    for (int c = range.start; c < range.end; ++c) in_view[c] = ChunkVisible(c, camera_from_world);
+    for (int c = range.start; c < range.end; ++c) {
+      RefreshChunk(c);
+      in_view[c] = ChunkVisible(c, camera_from_world);
+    }
   });
   entry_offset_.resize(chunks);
   size_t entries = 0;
@@ -186,7 +199,7 @@ void SurfelFusion::NearestPerPixel() {
 template <typename Visit>
 void SurfelFusion::ForEachSplatPixel(const SE3& world_from_camera, Visit visit) {
   const SE3 camera_from_world = world_from_camera.Inverse();
-  chunks_.resize((map_.size() + kChunk - 1) / kChunk);
+  SettleChunks();  // (writes nothing when settled: renders may then run at once)
   const Eigen::Matrix3f r = camera_from_world.RotationMatrix().cast<float>();
   const Eigen::Vector3f t = camera_from_world.translation().cast<float>();
   const float focal = static_cast<float>(0.5 * (camera_.fx + camera_.fy));
