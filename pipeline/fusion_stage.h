@@ -28,8 +28,8 @@
 // logged; the run goes on.
 //
 // Thread-safety: OfferFrame() from the track thread; OfferFill(), FillsProcessed() and
-// CloseFills() from the fill thread; Cancel() from any thread; Finish() and Report() from the
-// owner's.
+// CloseFills() from the fill stage's writing thread; Cancel() from any thread; Finish() and
+// Report() from the owner's.
 #pragma once
 
 #include <atomic>
