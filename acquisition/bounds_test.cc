@@ -5,6 +5,11 @@
 #include <cmath>
 #include <string>
 
+#include "acquisition/depth.h"
+#include "acquisition/frame_sink.h"
+#include "acquisition/frame_source.h"
+#include "acquisition/trajectory_metrics.h"
+
 namespace gf {
 namespace {
 
@@ -69,6 +74,31 @@ TEST(FieldCheck, ListsAndPartsNameTheirPlace) {
   EXPECT_EQ(message, "max_depth_m must be more than min_depth_m");
   FieldCheck silent(nullptr);  // no message wanted
   EXPECT_FALSE(silent.In("a", 9, 0, 1, "is too much").ok());
+}
+
+// The acquisition layer's own Options refuse a bad value naming the field and the value.
+TEST(FieldCheck, AcquisitionOptionsNameTheFieldTheyRefuse) {
+  std::string problem;
+  DepthConversionOptions depth;
+  depth.min_depth_m = 3;
+  depth.max_depth_m = 2;
+  EXPECT_FALSE(depth.Check(&problem));
+  EXPECT_EQ(problem, "max_depth_m must be more than min_depth_m");
+  TumFolderSinkOptions sink;
+  sink.depth_scale = 1e6;
+  EXPECT_FALSE(sink.Check(&problem));
+  EXPECT_EQ(problem.rfind("depth_scale 1000000 leaves no room for half a metre", 0), 0u) << problem;
+  FrameSourceOptions source;
+  source.shadows.min_relative_jump = -1;
+  EXPECT_FALSE(source.Check(&problem));
+  EXPECT_EQ(problem.rfind("shadows.min_relative_jump -1 ", 0), 0u) << problem;
+  source = FrameSourceOptions();
+  source.max_association_dt_s = 5;
+  EXPECT_FALSE(source.Check(&problem));
+  EXPECT_EQ(problem, "max_association_dt_s 5 is more than a second (at most 1)");
+  EXPECT_TRUE(FrameSourceOptions().Check(&problem)) << problem;
+  EXPECT_TRUE(TumFolderSinkOptions().Check(&problem)) << problem;
+  EXPECT_TRUE(TrajectoryErrorOptions().Check(&problem)) << problem;
 }
 
 }  // namespace

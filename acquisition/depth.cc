@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "acquisition/errors.h"
+#include "acquisition/bounds.h"
 
 namespace gf {
 
@@ -83,11 +84,11 @@ std::string DepthConvention::ValidateRaw(const cv::Mat& raw) const {
 }
 
 bool DepthConversionOptions::Check(std::string* message) const {
-  if (!(min_depth_m >= 0) || !(max_depth_m > min_depth_m)) {
-    if (message) *message = "need 0 <= min_depth_m < max_depth_m";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.In("min_depth_m", min_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Above("max_depth_m", max_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Require(max_depth_m > min_depth_m, "max_depth_m must be more than min_depth_m");
+  return c.ok();
 }
 
 double MedianReturnDepth(const cv::Mat& raw, const DepthConvention& convention, int step) {
@@ -170,12 +171,13 @@ cv::Mat DepthToRaw(const cv::Mat& depth_m, const DepthConvention& convention) {
 }
 
 bool ShadowOptions::Check(std::string* message) const {
-  if (!(min_relative_jump > 0) || !(width_tolerance_px >= 0) ||
-      !std::isfinite(projector_baseline_m)) {
-    if (message) *message = "need min_relative_jump > 0, width_tolerance_px >= 0, finite baseline";
-    return false;
-  }
-  return true;
+  // The baseline is signed (the projector's side of the camera).
+  FieldCheck c(message);
+  c.Above("min_relative_jump", min_relative_jump, 0, kMaxRelativeDepth, kBeyondAnyDepthRange)
+      .In("width_tolerance_px", width_tolerance_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .In("projector_baseline_m", projector_baseline_m, -kMaxSceneM, kMaxSceneM,
+          kLargerThanAnyScene);
+  return c.ok();
 }
 
 namespace {

@@ -15,16 +15,16 @@
 #include <opencv2/imgproc.hpp>
 
 #include "acquisition/file_util.h"
+#include "acquisition/bounds.h"
 #endif
 
 namespace gf {
 
 bool OpenNI2Options::Check(std::string* message) const {
-  if (timeout_ms <= 0) {
-    if (message) *message = "timeout_ms must be positive";
-    return false;
-  }
-  return true;
+  // A frame waited for longer than a day is a device that stopped.
+  FieldCheck c(message);
+  c.In("timeout_ms", timeout_ms, 1, 86'400'000.0, "is longer than a day");
+  return c.ok();
 }
 
 #if GF_HAVE_OPENNI2

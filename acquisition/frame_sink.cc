@@ -10,17 +10,18 @@
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;
 
 namespace gf {
 
 bool TumFolderSinkOptions::Check(std::string* message) const {
-  if (!(depth_scale > 0) || depth_scale * 0.5 > 65535) {
-    if (message) *message = "depth_scale must be positive and leave room for 0.5 m in 16 bits";
-    return false;
-  }
-  return true;
+  // Units per metre: 16-bit PNG depth must hold at least half a metre.
+  FieldCheck c(message);
+  c.Above("depth_scale", depth_scale, 0, 2 * 65535.0,
+          "leaves no room for half a metre in 16 bits");
+  return c.ok();
 }
 
 TumFolderSink::TumFolderSink(std::string out_dir, CameraFile camera, TumFolderSinkOptions options)

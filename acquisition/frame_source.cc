@@ -93,12 +93,12 @@ std::string FirstExistingDir(const std::string& folder, std::initializer_list<co
 }  // namespace
 
 bool FrameSourceOptions::Check(std::string* message) const {
-  if (!depth.Check(message) || !shadows.Check(message)) return false;
-  if (!(max_association_dt_s > 0)) {
-    if (message) *message = "max_association_dt_s must be positive";
-    return false;
-  }
-  return true;
+  // Colour and depth stamps further apart than a second are not one frame.
+  FieldCheck c(message);
+  c.Part("depth", depth)
+      .Part("shadows", shadows)
+      .Above("max_association_dt_s", max_association_dt_s, 0, 1, "is more than a second");
+  return c.ok();
 }
 
 void ProcessRawDepth(const cv::Mat& raw, const std::string& where, const CameraFile& camera,

@@ -7,15 +7,15 @@
 #include <set>
 
 #include "acquisition/errors.h"
+#include "acquisition/bounds.h"
 
 namespace gf {
 
 bool TrajectoryErrorOptions::Check(std::string* message) const {
-  if (!(max_dt >= 0)) {
-    if (message) *message = "max_dt must be >= 0";
-    return false;
-  }
-  return true;
+  // Seconds, or frame indices for .log trajectories: a day's frames bounds both.
+  FieldCheck c(message);
+  c.In("max_dt", max_dt, 0, kMaxCaptureFrames, kMoreFramesThanACapture);
+  return c.ok();
 }
 
 std::string TrajectoryErrorSummary::BriefReport() const {

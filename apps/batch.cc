@@ -22,6 +22,7 @@
 #include "acquisition/json_text.h"
 #include "apps/interrupt.h"
 #include "apps/progress.h"
+#include "acquisition/bounds.h"
 
 extern char** environ;
 
@@ -216,14 +217,18 @@ void WriteState(RunFolder* out, const Running& r, bool ok, double seconds) {
 }  // namespace
 
 bool BatchOptions::Check(std::string* message) const {
-  std::string problem;
-  if (manifest.empty() || out_dir.empty()) problem = "need MANIFEST and --out";
-  if (jobs < 1) problem = "--jobs must be at least 1";
-  if (retries < 0) problem = "retries must be 0 or more";
-  if (slurm_cpus_per_task < 1 || slurm_max_running < 0) problem = "bad Slurm resources";
-  if (submit && !slurm) problem = "--submit needs --slurm";
-  if (message) *message = problem;
-  return problem.empty();
+  // Jobs, retries and Slurm's limits count runs: at most one per frame of a day's capture.
+  FieldCheck c(message);
+  c.Require(!manifest.empty(), "MANIFEST: the list of captures")
+      .Require(!out_dir.empty(), "--out: the folder of the runs")
+      .In("--jobs", jobs, 1, kMaxCaptureFrames, kMoreFramesThanACapture)
+      .In("retries", retries, 0, kMaxCaptureFrames, kMoreFramesThanACapture)
+      .In("--cpus-per-task", slurm_cpus_per_task, 1, kMaxCaptureFrames,
+          kMoreFramesThanACapture)
+      .In("--max-running", slurm_max_running, 0, kMaxCaptureFrames,
+          kMoreFramesThanACapture)
+      .Require(!submit || slurm, "--submit needs --slurm");
+  return c.ok();
 }
 
 std::vector<BatchCapture> ReadManifest(const std::string& manifest,

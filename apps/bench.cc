@@ -31,6 +31,7 @@
 #include "sfm/keyframe_filler.h"
 #include "sfm/stereo_fill.h"
 #include "surfels/fusion.h"
+#include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;
 
@@ -329,15 +330,14 @@ std::vector<MethodResult> RunOdometryPeers(const std::vector<RgbdFrame>& frames,
 }  // namespace
 
 bool BenchOptions::Check(std::string* message) const {
-  if (input.empty() || first_frame < 0 || (end_frame >= 0 && end_frame <= first_frame)) {
-    if (message) *message = "need INPUT and 0 <= A < B in --frames A:B";
-    return false;
-  }
-  if (fill_every < 0) {
-    if (message) *message = "need --fill-every >= 0";
-    return false;
-  }
-  return source.Check(message) && pipeline.Check(message);
+  FieldCheck c(message);
+  c.Require(!input.empty(), "INPUT: the capture to time")
+      .Require(first_frame >= 0 && (end_frame < 0 || end_frame > first_frame),
+               "--frames A:B needs 0 <= A < B")
+      .In("--fill-every", fill_every, 0, kMaxCaptureFrames, kMoreFramesThanACapture)
+      .Part("source", source)
+      .Part("settings", pipeline);
+  return c.ok();
 }
 
 nlohmann::ordered_json RunBench(const BenchOptions& options) {

@@ -7,15 +7,16 @@
 #include "acquisition/frame_source.h"
 #include "apps/interrupt.h"
 #include "apps/progress.h"
+#include "acquisition/bounds.h"
 
 namespace gf {
 
 bool CaptureOptions::Check(std::string* message) const {
-  if (device.empty() || out_dir.empty() || frames < 0) {
-    if (message) *message = "need --device, --out and --frames >= 0";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.Require(!device.empty(), "--device: which device or recording to read")
+      .Require(!out_dir.empty(), "--out: the folder to write")
+      .In("--frames", frames, 0, kMaxCaptureFrames, kMoreFramesThanACapture);
+  return c.ok();
 }
 
 int RunCapture(const CaptureOptions& options) {

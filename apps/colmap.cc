@@ -19,6 +19,7 @@
 #include "acquisition/trajectory.h"
 #include "pipeline/run_sink.h"
 #include "sfm/colmap_io.h"
+#include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;
 
@@ -82,12 +83,13 @@ ColmapExportSummary RunColmapExport(const std::string& run_dir, const std::strin
 }
 
 bool ColmapImportOptions::Check(std::string* message) const {
-  if (!(max_sensor_error > 0) || min_sensor_samples < 1 || !(min_depth_m > 0) ||
-      !(max_depth_m > min_depth_m)) {
-    if (message) *message = "colmap-import: positive thresholds, min_depth < max_depth";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.Above("max_sensor_error", max_sensor_error, 0, kMaxRelativeDepth, kBeyondAnyDepthRange)
+      .In("min_sensor_samples", min_sensor_samples, 1, kMaxImagePixels, kMoreThanAnImagesPixels)
+      .Above("min_depth_m", min_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Above("max_depth_m", max_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Require(max_depth_m > min_depth_m, "max_depth_m must be more than min_depth_m");
+  return c.ok();
 }
 
 std::string ColmapImportSummary::BriefReport() const {

@@ -23,6 +23,7 @@
 #include "report/compare_report.h"
 #include "report/report_html.h"
 #include "report/run_report.h"
+#include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;
 
@@ -58,11 +59,11 @@ cv::Mat Overview(const RgbdFrame& frame) {
 }  // namespace
 
 bool DemoOptions::Check(std::string* message) const {
-  if (out_dir.empty() || frames < 2) {
-    if (message) *message = "need an output folder and at least 2 frames";
-    return false;
-  }
-  return true;
+  // A stereo pair needs two frames; the demo renders its capture in memory.
+  FieldCheck c(message);
+  c.Require(!out_dir.empty(), "--out: the folder to write")
+      .In("--frames", frames, 2, 100000, "is more frames than a rendered capture holds");
+  return c.ok();
 }
 
 namespace {

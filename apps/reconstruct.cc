@@ -12,17 +12,19 @@
 #include "report/run_report.h"
 #include "surfels/mesh.h"
 #include "surfels/ply.h"
+#include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;
 
 namespace gf {
 
 bool ReconstructOptions::Check(std::string* message) const {
-  if (input.empty() || out_dir.empty()) {
-    if (message) *message = "need INPUT and --out";
-    return false;
-  }
-  return source.Check(message) && pipeline.Check(message);
+  FieldCheck c(message);
+  c.Require(!input.empty(), "INPUT: the capture to reconstruct")
+      .Require(!out_dir.empty(), "--out: the run folder")
+      .Part("source", source)
+      .Part("settings", pipeline);
+  return c.ok();
 }
 
 void ParseFrameRange(const std::string& range, int* first, int* end) {

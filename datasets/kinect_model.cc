@@ -8,6 +8,7 @@
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
 #include "datasets/synth.h"
+#include "acquisition/bounds.h"
 
 namespace gf::synth {
 namespace {
@@ -112,25 +113,31 @@ Reading MeasureClearGlass(const Sensor& s, int u, int v, const Hit& glass, doubl
 }  // namespace
 
 bool KinectModelOptions::Check(std::string* message) const {
-  if (!(min_depth_m > 0 && max_depth_m > min_depth_m && noise_a_m >= 0 && noise_b_per_m >= 0 &&
-        ir_return_probability >= 0 && ir_return_probability <= 1 && grazing_angle_deg > 0 &&
-        grazing_angle_deg <= 90)) {
-    if (message)
-      *message = "Kinect model: need 0 < min < max depth, noise >= 0, probability in [0,1]";
-    return false;
-  }
-  if (!(glass_surface_probability >= 0 && glass_hole_probability >= 0 &&
-        glass_surface_probability + glass_hole_probability <= 1 && glass_surface_exponent >= 0 &&
-        glass_surface_exponent <= 100 && glass_hole_exponent >= 0 && glass_hole_exponent <= 100 &&
-        std::abs(glass_through_offset_m) <= 1 && glass_through_sigma_m >= 0 &&
-        glass_through_sigma_m <= 1 && glass_patch_px >= 0 && glass_patch_px <= 1000)) {
-    if (message)
-      *message =
-          "Kinect model: clear glass needs probabilities >= 0 summing to at most 1, exponents in "
-          "[0,100], offset and sigma within 1 m (sigma >= 0), patches of 0-1000 px";
-    return false;
-  }
-  return true;
+  // A power of cos(theta) beyond 100 is zero for any incidence but head-on; glass displaces the
+  // depth read through it by centimetres, never a metre.
+  constexpr double kSteepest = 100;
+  constexpr double kMaxGlassOffsetM = 1;
+  FieldCheck c(message);
+  c.In("projector_baseline_m", projector_baseline_m, -kMaxSceneM, kMaxSceneM, kLargerThanAnyScene)
+      .Above("min_depth_m", min_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Above("max_depth_m", max_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Require(max_depth_m > min_depth_m, "max_depth_m must be more than min_depth_m")
+      .In("noise_a_m", noise_a_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .In("noise_b_per_m", noise_b_per_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .In("ir_return_probability", ir_return_probability, 0, 1, kMoreThanOne)
+      .Above("grazing_angle_deg", grazing_angle_deg, 0, 90, "is beyond grazing incidence")
+      .In("glass_surface_probability", glass_surface_probability, 0, 1, kMoreThanOne)
+      .In("glass_hole_probability", glass_hole_probability, 0, 1, kMoreThanOne)
+      .Require(glass_surface_probability + glass_hole_probability <= 1,
+               "glass_surface_probability + glass_hole_probability must be at most 1")
+      .In("glass_surface_exponent", glass_surface_exponent, 0, kSteepest, "is steeper than 100")
+      .In("glass_hole_exponent", glass_hole_exponent, 0, kSteepest, "is steeper than 100")
+      .In("glass_through_offset_m", glass_through_offset_m, -kMaxGlassOffsetM, kMaxGlassOffsetM,
+          "is more than a metre")
+      .In("glass_through_sigma_m", glass_through_sigma_m, 0, kMaxGlassOffsetM,
+          "is more than a metre")
+      .In("glass_patch_px", glass_patch_px, 0, kMaxImageSidePx, kLargerThanAnyImage);
+  return c.ok();
 }
 
 KinectModelOptions KinectModelOptions::ClearGlassAsHoles() {

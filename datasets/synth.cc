@@ -19,6 +19,7 @@
 #include "acquisition/image_io.h"
 #include "acquisition/json_text.h"
 #include "acquisition/trajectory.h"
+#include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;
 
@@ -63,12 +64,14 @@ bool SynthOptions::Check(std::string* message) const {
       *message = "unknown motion \"" + motion + "\" (orbit, vertical, diagonal, forward)";
     return false;
   }
-  if (frames < 1 || frames > 100000 || !(fps > 0) || !(degrees_per_frame >= 0) ||
-      !(jitter_m >= 0)) {
-    if (message) *message = "need 1 <= frames <= 100000, fps > 0, speed and jitter >= 0";
-    return false;
-  }
-  return kinect.Check(message);
+  // A rendered capture is held in memory: at most 100,000 frames.
+  FieldCheck c(message);
+  c.In("frames", frames, 1, 100000, "is more frames than a rendered capture holds")
+      .Above("fps", fps, 0, 10000, "is faster than any camera")
+      .In("degrees_per_frame", degrees_per_frame, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .In("jitter_m", jitter_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Part("kinect", kinect);
+  return c.ok();
 }
 
 Camera SynthCamera() { return Camera{}; }  // 640x480, fx = fy = 525, cx 319.5, cy 239.5

@@ -13,6 +13,7 @@
 #include "pipeline/settings.h"
 #include "pipeline/stages.h"
 #include "pipeline/timing.h"
+#include "acquisition/bounds.h"
 
 namespace gf {
 namespace {
@@ -93,17 +94,16 @@ std::string Describe(const std::exception_ptr& error) {
 }  // namespace
 
 bool ReconstructionOptions::Check(std::string* message) const {
-  if (first_frame < 0 || (end_frame >= 0 && end_frame <= first_frame)) {
-    if (message) *message = "need 0 <= first_frame < end_frame";
-    return false;
-  }
-  if (queue_capacity < 1) {
-    if (message) *message = "queue_capacity must be positive";
-    return false;
-  }
-  return tracker.Check(message) && (!fill || fill_options.Check(message)) &&
-         (!fusion || fusion_options.Check(message)) &&
-         (!loop_closure || loop_options.Check(message));
+  FieldCheck c(message);
+  c.In("first_frame", first_frame, 0, kMaxCaptureFrames, kMoreFramesThanACapture)
+      .Require(end_frame < 0 || end_frame > first_frame,
+               "end_frame must be more than first_frame (or negative: to the end)")
+      .In("queue_capacity", queue_capacity, 1, kMaxFramesInMemory, kMoreFramesThanMemory)
+      .Part("tracker", tracker);
+  if (fill) c.Part("fill", fill_options);
+  if (fusion) c.Part("fusion", fusion_options);
+  if (loop_closure) c.Part("loop_closure", loop_options);
+  return c.ok();
 }
 
 std::string ReconstructionSummary::BriefReport() const {

@@ -13,6 +13,7 @@
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "acquisition/bounds.h"
 
 namespace gf {
 namespace {
@@ -80,12 +81,17 @@ double Quantile(std::vector<double> v, double q) {
 }  // namespace
 
 bool CompletenessOptions::Check(std::string* message) const {
-  if (!(sample_spacing_m > 0) || !(observed_tolerance > 0) || within_m.empty() ||
-      !(min_depth_m >= 0) || !(max_depth_m > min_depth_m)) {
-    if (message) *message = "completeness: positive spacing and tolerance, some thresholds";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.Above("sample_spacing_m", sample_spacing_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("observed_tolerance", observed_tolerance, 0, kMaxRelativeDepth, kBeyondAnyDepthRange)
+      .Require(!within_m.empty(), "within_m needs at least one distance");
+  for (size_t i = 0; i < within_m.size(); ++i)
+    c.Above(("within_m[" + std::to_string(i) + "]").c_str(), within_m[i], 0, kMaxSceneM,
+            kLargerThanAnyScene);
+  c.In("min_depth_m", min_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Above("max_depth_m", max_depth_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .Require(max_depth_m > min_depth_m, "max_depth_m must be more than min_depth_m");
+  return c.ok();
 }
 
 std::string MapScore::BriefReport() const {

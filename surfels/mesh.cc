@@ -13,15 +13,18 @@
 
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "acquisition/bounds.h"
 
 namespace gf {
 
 bool MeshOptions::Check(std::string* message) const {
-  if (!(search_radius_m > 0) || !(neighbour_factor > 0) || max_neighbours < 3) {
-    if (message) *message = "mesh: positive radius and factor, at least 3 neighbours";
-    return false;
-  }
-  return true;
+  // A triangle needs 3 neighbours; each is a point of the map (at most kMaxMapSurfels).
+  FieldCheck c(message);
+  c.Above("search_radius_m", search_radius_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("neighbour_factor", neighbour_factor, 0, kMaxSceneM,
+             "makes a search radius larger than any scene")
+      .In("max_neighbours", max_neighbours, 3, kMaxImagePixels, kMoreThanAnImagesPixels);
+  return c.ok();
 }
 
 std::string MeshSummary::BriefReport() const {

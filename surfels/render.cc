@@ -4,15 +4,15 @@
 #include <cmath>
 
 #include "acquisition/errors.h"
+#include "acquisition/bounds.h"
 
 namespace gf {
 
 bool RenderOptions::Check(std::string* message) const {
-  if (max_splat_px < 0 || !(min_depth_m > 0)) {
-    if (message) *message = "render: max_splat_px >= 0, positive min_depth_m";
-    return false;
-  }
-  return true;
+  FieldCheck c(message);
+  c.In("max_splat_px", max_splat_px, 0, kMaxImageSidePx, kLargerThanAnyImage)
+      .Above("min_depth_m", min_depth_m, 0, kMaxDepthM, kFartherThanAnySensor);
+  return c.ok();
 }
 
 SurfelImage RenderSurfels(const std::vector<Surfel>& surfels, const Camera& camera,
