@@ -35,7 +35,7 @@ enum class HoleCode : uint8_t {
 };
 
 // Where a pixel's depth came from: the `source` field of map.ply and of every filled depth image.
-// kCarried: stereo depth of earlier keyframes carried into this one (sfm/fill_carry.h).
+// kCarried: stereo depth of earlier keyframes carried into this one (fill/fill_carry.h).
 // kTransparent: a surface the sensor both reads and sees through (clear glass), found by the
 // map's fusion (surfels/fusion.h, FusionOptions::glass). (3 was taken by the COLMAP fill first.)
 enum class DepthSource : uint8_t {

@@ -28,8 +28,8 @@
 #include "pipeline/settings.h"
 #include "pipeline/timing.h"
 #include "registration/tracker.h"
-#include "sfm/keyframe_filler.h"
-#include "sfm/stereo_fill.h"
+#include "fill/keyframe_filler.h"
+#include "fill/stereo_fill.h"
 #include "surfels/fusion.h"
 #include "acquisition/bounds.h"
 

@@ -8,7 +8,7 @@
 // world_from_current = world_from_previous * Rt^-1 (OpenCV's Rt maps source points to the
 // destination frame). A peer that fails on a frame keeps its previous pose there, as ours does.
 //
-// With fill_every, the keyframe fill that the pipeline runs (sfm/keyframe_filler.h: pair
+// With fill_every, the keyframe fill that the pipeline runs (fill/keyframe_filler.h: pair
 // selection, FillHolesByStereo, the carry) is timed per keyframe with OpenCV held to one thread:
 // the "time per keyframe pair on one core" figure.
 #pragma once

@@ -18,7 +18,7 @@
 #include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
 #include "pipeline/run_sink.h"
-#include "sfm/colmap_io.h"
+#include "fill/colmap_io.h"
 #include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;

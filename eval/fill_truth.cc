@@ -15,6 +15,15 @@ namespace fs = std::filesystem;
 namespace gf {
 namespace {
 
+// A 16-bit depth image as metres (value / scale), as CV_64F.
+cv::Mat Metres(const cv::Mat& depth16, double scale) {
+  cv::Mat out(depth16.size(), CV_64F);
+  for (int v = 0; v < depth16.rows; ++v)
+    for (int u = 0; u < depth16.cols; ++u)
+      out.at<double>(v, u) = depth16.at<uint16_t>(v, u) / scale;
+  return out;
+}
+
 void ScoreKeyframe(const std::string& scene_dir, const fs::path& keyframes, const std::string& ts,
                    double truth_scale, FillScore* score) {
   const cv::Mat filled = ReadDepthImage((keyframes / (ts + ".depth_filled.png")).string());
@@ -34,29 +43,40 @@ void ScoreKeyframe(const std::string& scene_dir, const fs::path& keyframes, cons
   if (holes.empty() || label.empty() || glass.size() != label.size())
     throw InputError(keyframes.string(),
                      "keyframe " + ts + ": a mask or the label missing, or of another size");
+  ScoreKeyframeFill(Metres(filled, 1000.0), holes, label, Metres(truth, truth_scale),
+                    Metres(first_surface, truth_scale), glass, score);
+}
+
+}  // namespace
+
+std::string MaterialName(int m) { return synth::MaterialName(static_cast<synth::Material>(m)); }
+
+void ScoreKeyframeFill(const cv::Mat& filled_m, const cv::Mat& holes, const cv::Mat& label,
+                       const cv::Mat& truth_m, const cv::Mat& first_surface_m,
+                       const cv::Mat& glass, FillScore* score) {
+  GF_CHECK(filled_m.type() == CV_64F && truth_m.type() == CV_64F && holes.type() == CV_8U &&
+               label.type() == CV_8U && filled_m.size() == label.size() &&
+               holes.size() == label.size() && truth_m.size() == label.size(),
+           "ScoreKeyframeFill: CV_64F depths and CV_8U masks of one size");
+  const bool glass_known = first_surface_m.size() == label.size() && glass.size() == label.size();
   const int clear_glass = static_cast<int>(synth::Material::kClearGlass);
   for (int v = 0; v < label.rows; ++v)
     for (int u = 0; u < label.cols; ++u) {
       const int m = label.at<uint8_t>(v, u);
       if (m >= kSynthMaterials || holes.at<uint8_t>(v, u) == 0) continue;
       ++score->holes[m];
-      const double z = filled.at<uint16_t>(v, u) / 1000.0,
-                   t = truth.at<uint16_t>(v, u) / truth_scale;
-      if (z <= 0 || t <= 0) continue;
+      const double z = filled_m.at<double>(v, u), t = truth_m.at<double>(v, u);
+      if (!(z > 0) || !(t > 0)) continue;
       ++score->filled[m];
       const double e = std::abs(z - t) / t;
       score->errors[m].push_back(static_cast<float>(e));
       score->good[m] += e <= 0.03;
-      if (m == clear_glass &&
-          synth::AtClearGlassDepth(z, first_surface.at<uint16_t>(v, u) / truth_scale, t))
+      if (glass_known && m == clear_glass &&
+          synth::AtClearGlassDepth(z, first_surface_m.at<double>(v, u), t))
         ++(glass.at<uint8_t>(v, u) ? score->clear_glass_marked_at_glass_depth
                                    : score->clear_glass_at_glass_depth);
     }
 }
-
-}  // namespace
-
-std::string MaterialName(int m) { return synth::MaterialName(static_cast<synth::Material>(m)); }
 
 SensorHoles MeasureSensorHoles(const std::string& scene_dir, RgbdFrame* first) {
   auto source = OpenFrameSource(scene_dir, {});

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "acquisition/rgbd_frame.h"
 
 namespace gf {
@@ -41,6 +43,15 @@ struct FillScore {
     return holes[m] ? static_cast<double>(n[m]) / holes[m] : 0.0;
   }
 };
+
+// One keyframe's fill scored into *score: filled_m and truth_m (the depth of what the colour
+// camera sees) CV_64F metres, 0 where none; holes (the sensor's) and label (synth::Material)
+// CV_8U. For clear glass, first_surface_m (CV_64F, the first surface along each ray) and glass
+// (CV_8U, the keyframe's glass_mask) split the fills at the glass's own depth; either may be empty
+// (not counted). The run-folder scorer below and the in-memory tests share it.
+void ScoreKeyframeFill(const cv::Mat& filled_m, const cv::Mat& holes, const cv::Mat& label,
+                       const cv::Mat& truth_m, const cv::Mat& first_surface_m,
+                       const cv::Mat& glass, FillScore* score);
 
 // Every keyframe of the run in run_dir (keyframes/<ts>.depth_filled.png, hole_mask.png,
 // glass_mask.png) against the capture in scene_dir. Throws InputError on a missing mask.

@@ -4,7 +4,7 @@
 // The tracker hands each new keyframe to Offer(): keyframes go into a bounded queue; for live
 // input a keyframe that finds the queue full is dropped from the fill (and counted), so tracking
 // never waits on stereo; for recorded input Offer() waits for room (options.drop_when_busy). Three
-// threads run the KeyframeFiller's steps (sfm/keyframe_filler.h), joined by small bounded queues,
+// threads run the KeyframeFiller's steps (fill/keyframe_filler.h), joined by small bounded queues,
 // so that one keyframe's stereo overlaps the next one's pairing and the last one's writing:
 // gf-fill pairs (features, partner, refined poses), gf-stereo fills the holes by stereo,
 // gf-fill-write carries the earlier fills into each keyframe, writes its images through the
@@ -39,7 +39,7 @@
 #include "pipeline/fusion_stage.h"
 #include "pipeline/run_sink.h"
 #include "pipeline/stage_thread.h"
-#include "sfm/keyframe_filler.h"
+#include "fill/keyframe_filler.h"
 
 namespace gf {
 

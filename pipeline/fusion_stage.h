@@ -49,7 +49,7 @@
 #include "pipeline/pose_corrections.h"
 #include "pipeline/run_sink.h"
 #include "pipeline/stage_thread.h"
-#include "sfm/keyframe_filler.h"
+#include "fill/keyframe_filler.h"
 #include "surfels/fusion.h"
 
 namespace gf {

@@ -36,7 +36,7 @@
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/run_folder.h"
 #include "acquisition/trajectory.h"
-#include "sfm/fill_carry.h"
+#include "fill/fill_carry.h"
 #include "surfels/surfel_map.h"
 
 namespace gf {

@@ -1,5 +1,7 @@
 #include "pipeline/settings.h"
 
+#include <spdlog/spdlog.h>
+
 #include <cstdint>
 #include <limits>
 
@@ -84,10 +86,33 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PoseGraphOptions, max_loop_chi2, loop_huber, 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopStageOptions, database, detector, graph, queue_capacity,
                                    odometry_noise, gap_sigma_m, gap_sigma_deg,
                                    relocalise_candidates, free_keyframes)
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionStageOptions, fusion, queue_capacity, count_every,
-                                   fuse_carried, complete_keyframes, completion_max_gap_px,
-                                   completion_max_angle_deg, completion_min_support,
-                                   completion_occluder_px, completion_support_half)
+// The fusion stage's settings and its map's (FusionOptions) side by side under "fusion" (their
+// names differ); the glass settings have their own place ("glass").
+void to_json(nlohmann::json& j, const FusionStageOptions& o) {
+  j = o.fusion;
+  j["queue_capacity"] = o.queue_capacity;
+  j["count_every"] = o.count_every;
+  j["fuse_carried"] = o.fuse_carried;
+  j["complete_keyframes"] = o.complete_keyframes;
+  j["completion_max_gap_px"] = o.completion_max_gap_px;
+  j["completion_max_angle_deg"] = o.completion_max_angle_deg;
+  j["completion_min_support"] = o.completion_min_support;
+  j["completion_occluder_px"] = o.completion_occluder_px;
+  j["completion_support_half"] = o.completion_support_half;
+}
+
+void from_json(const nlohmann::json& j, FusionStageOptions& o) {
+  j.get_to(o.fusion);
+  j.at("queue_capacity").get_to(o.queue_capacity);
+  j.at("count_every").get_to(o.count_every);
+  j.at("fuse_carried").get_to(o.fuse_carried);
+  j.at("complete_keyframes").get_to(o.complete_keyframes);
+  j.at("completion_max_gap_px").get_to(o.completion_max_gap_px);
+  j.at("completion_max_angle_deg").get_to(o.completion_max_angle_deg);
+  j.at("completion_min_support").get_to(o.completion_min_support);
+  j.at("completion_occluder_px").get_to(o.completion_occluder_px);
+  j.at("completion_support_half").get_to(o.completion_support_half);
+}
 
 namespace {
 
@@ -143,6 +168,24 @@ void CheckAgainst(const nlohmann::json& given, const nlohmann::json& known,
   }
 }
 
+// Settings that moved, read at their old place for one release with a warning: "fusion.fusion.X"
+// (the map's settings) is "fusion.X" since 2026-12-07. A key given at both places keeps the new
+// one's value.
+void MoveOldKeys(const std::string& path, nlohmann::json* given) {
+  if (!given->is_object() || !given->contains("fusion") || !(*given)["fusion"].is_object())
+    return;
+  nlohmann::json& fusion = (*given)["fusion"];
+  if (!fusion.contains("fusion") || !fusion["fusion"].is_object()) return;
+  const nlohmann::json old = fusion["fusion"];
+  fusion.erase("fusion");
+  for (const auto& [key, value] : old.items())
+    if (!fusion.contains(key)) fusion[key] = value;
+  spdlog::warn("{}: settings under \"fusion\": {{\"fusion\": ...}} are now directly under "
+               "\"fusion\" (fusion.fusion.X is fusion.X); the old place is read until the next "
+               "release",
+               path);
+}
+
 }  // namespace
 
 nlohmann::ordered_json SettingsToJson(const ReconstructionOptions& options) {
@@ -158,6 +201,7 @@ void ApplyConfig(const std::string& text, const std::string& path, Reconstructio
     // parse_error, and out_of_range for a number beyond a double (1e400).
     throw InputError(path, std::string("not valid JSON: ") + e.what());
   }
+  MoveOldKeys(path, &given);
   nlohmann::json merged = SettingsTree(*options);
   CheckAgainst(given, merged, "", path);
   merged.merge_patch(given);
@@ -190,6 +234,7 @@ void ApplyConfig(const std::string& text, const std::string& path, Reconstructio
   if (!f.carry.Check(&problem)) refuse("fill.carry");
   if (!f.Check(&problem)) refuse("fill");
   if (!o.fusion_options.fusion.glass.Check(&problem)) refuse("glass");
+  if (!o.fusion_options.fusion.Check(&problem)) refuse("fusion");  // the map's, at fusion.X
   if (!o.fusion_options.Check(&problem)) refuse("fusion");
   if (!o.loop_options.Check(&problem)) refuse("loop_closure");
   *options = o;

@@ -9,7 +9,8 @@
 //             "stereo": {"sgbm": {...}, "plane_sweep": {...}, "depth_steps": {...},
 //                        "see_through": {...}, "validation": {...}, "photometric": {...}, ...},
 //             "carry": {...}},
-//    "fusion": {"fusion": {...}, "queue_capacity": 32, ...}}
+//    "fusion": {"max_surfels": 4000000, ..., "queue_capacity": 32, ...},
+//    "glass": {...}, "loop_closure": {...}}
 // Keys are the Options structs' field names. Settings the file leaves out keep their values.
 //
 // Usage:
@@ -31,7 +32,9 @@ nlohmann::ordered_json SettingsToJson(const ReconstructionOptions& options);
 // and the problem: not JSON (a number beyond a double too), not an object, an unknown setting, a
 // value of the wrong type (a fraction for an integer, a number for true/false, an integer beyond
 // an int), or values that the options' Check() refuses, named by their place in the tree
-// ("fusion.fusion.normal_filter_px 30000 is larger than any half-size image (at most 2048)").
+// ("fusion.normal_filter_px 30000 is larger than any half-size image (at most 2048)").
+// The map's settings given at their place before 2026-12-07 ("fusion": {"fusion": {...}}) are
+// read with a warning.
 // Every number has an upper bound (acquisition/bounds.h). On a throw the options are unchanged.
 void ApplyConfig(const std::string& text, const std::string& path, ReconstructionOptions* options);
 

@@ -112,15 +112,15 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
 // Values beyond a bound with a meaning are refused, naming the setting by its place in the tree.
 TEST(Config, RefusesValuesBeyondTheirBoundsNamingTheSetting) {
   ReconstructionOptions options;
-  EXPECT_EQ(Problem(R"({"fusion": {"fusion": {"normal_filter_px": 30000}}})", &options),
-            "fusion.fusion.normal_filter_px 30000 is larger than any half-size image (at most "
+  EXPECT_EQ(Problem(R"({"fusion": {"normal_filter_px": 30000}})", &options),
+            "fusion.normal_filter_px 30000 is larger than any half-size image (at most "
             "2048)");
   EXPECT_EQ(Problem(R"({"fill": {"pairs": {"refine": {"photometric_iterations": [100000, 7]}}}})",
                     &options),
             "fill.pairs.refine.photometric_iterations[0] 100000 is more iterations than a "
             "frame's time allows (at most 1000)");
-  EXPECT_EQ(Problem(R"({"fusion": {"fusion": {"max_surfels": 2000000000}}})", &options),
-            "fusion.fusion.max_surfels 2000000000 takes more than the map's 16 GiB at 48 bytes "
+  EXPECT_EQ(Problem(R"({"fusion": {"max_surfels": 2000000000}})", &options),
+            "fusion.max_surfels 2000000000 takes more than the map's 16 GiB at 48 bytes "
             "a surfel (at most 357913941)");
   EXPECT_EQ(Problem(R"({"tracker": {"icp": {"max_distance_m": -1}}})", &options),
             "tracker.icp.max_distance_m -1 must be more than 0");
@@ -129,8 +129,8 @@ TEST(Config, RefusesValuesBeyondTheirBoundsNamingTheSetting) {
                 .rfind("loop_closure.detector.verification.noise.bias 50 ", 0),
             0u);
   // An integer beyond an int would wrap when read: refused before.
-  EXPECT_EQ(Problem(R"({"fusion": {"fusion": {"pixel_step": 4294967297}}})", &options),
-            "'fusion.fusion.pixel_step' 4294967297 is beyond any integer setting");
+  EXPECT_EQ(Problem(R"({"fusion": {"pixel_step": 4294967297}})", &options),
+            "'fusion.pixel_step' 4294967297 is beyond any integer setting");
   // A number beyond a double is no valid JSON number for us either (nlohmann: out_of_range).
   EXPECT_EQ(Problem(R"({"tracker": {"max_jump_m": 1e400}})", &options).rfind("not valid JSON", 0),
             0u);
@@ -170,6 +170,23 @@ TEST(Config, EveryNumericSettingHasAnUpperBound) {
 TEST(Config, MissingFileIsAnInputError) {
   ReconstructionOptions options;
   EXPECT_THROW(ApplyConfigFile("/nonexistent/config.json", &options), InputError);
+}
+
+// The map's settings moved from fusion.fusion.X to fusion.X: the old place is still read (with a
+// warning), and the new one wins where a file gives both.
+TEST(Config, ReadsTheMapsSettingsAtTheirOldPlace) {
+  ReconstructionOptions options;
+  EXPECT_EQ(Problem(R"({"fusion": {"fusion": {"max_surfels": 1000, "pixel_step": 3}}})", &options),
+            "");
+  EXPECT_EQ(options.fusion_options.fusion.max_surfels, 1000);
+  EXPECT_EQ(options.fusion_options.fusion.pixel_step, 3);
+  EXPECT_EQ(Problem(R"({"fusion": {"pixel_step": 2, "fusion": {"pixel_step": 5}}})", &options), "");
+  EXPECT_EQ(options.fusion_options.fusion.pixel_step, 2);
+  EXPECT_EQ(Problem(R"({"fusion": {"fusion": {"normal_filter_px": 30000}}})", &options),
+            "fusion.normal_filter_px 30000 is larger than any half-size image (at most 2048)");
+  const nlohmann::ordered_json tree = SettingsToJson(options);
+  EXPECT_FALSE(tree["fusion"].contains("fusion"));
+  EXPECT_EQ(tree["fusion"]["max_surfels"], 1000);
 }
 
 }  // namespace

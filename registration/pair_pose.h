@@ -1,5 +1,5 @@
 // The relative pose of two keyframes as stereo needs it, refined from their features and colour
-// (registration for the stereo fill, sfm/keyframe_pairs.h): keyframes with their U-SURF features
+// (registration for the stereo fill, fill/keyframe_pairs.h): keyframes with their U-SURF features
 // and 3D points, the pose refinement (PnP on the matches, then dense photometric alignment) and
 // its report.
 //

@@ -136,14 +136,14 @@ function(config_case json regex)
   expect_error("^error: .*bounds.json: ${regex}" reconstruct "${cap}" --out "${tmp}/run"
                --config "${tmp}/bounds.json")
 endfunction()
-config_case("{\"fusion\": {\"fusion\": {\"normal_filter_px\": 30000}}}"
-            "fusion.fusion.normal_filter_px 30000 is larger than any half-size image \\(at most 2048\\)$")
-config_case("{\"fusion\": {\"fusion\": {\"normal_filter_px\": 1000000000}}}"
-            "fusion.fusion.normal_filter_px 1000000000 is larger than any half-size image")
+config_case("{\"fusion\": {\"normal_filter_px\": 30000}}"
+            "fusion.normal_filter_px 30000 is larger than any half-size image \\(at most 2048\\)$")
+config_case("{\"fusion\": {\"normal_filter_px\": 1000000000}}"
+            "fusion.normal_filter_px 1000000000 is larger than any half-size image")
 config_case("{\"fill\": {\"pairs\": {\"refine\": {\"photometric_iterations\": [100000, 7, 7, 10]}}}}"
             "fill.pairs.refine.photometric_iterations\\[0\\] 100000 is more iterations than a frame's time allows")
-config_case("{\"fusion\": {\"fusion\": {\"max_surfels\": 2000000000}}}"
-            "fusion.fusion.max_surfels 2000000000 takes more than the map's 16 GiB")
+config_case("{\"fusion\": {\"max_surfels\": 2000000000}}"
+            "fusion.max_surfels 2000000000 takes more than the map's 16 GiB")
 config_case("{\"tracker\": {\"max_jump_m\": 1e400}}" "not valid JSON")
 if(EXISTS "${tmp}/run")
   message(FATAL_ERROR "a refused --config left ${tmp}/run behind")

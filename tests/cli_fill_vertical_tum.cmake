@@ -7,7 +7,7 @@
 # upright one does (tracking, fill-eval.py), since the scene and the motion are the same.
 # On these 40 frames SGBM alone fills about a tenth of the removed pixels, upright or not (few
 # keyframes to carry fills from, a third of the pairs refused by the validation), and the sweep
-# after it the rest; so SGBM's vertical geometry is checked by sfm/rectified_sgbm_test
+# after it the rest; so SGBM's vertical geometry is checked by fill/rectified_sgbm_test
 # (FillsAMostlyVerticalPair), and this test checks a whole run on portrait images against the
 # same run upright.
 include("${CMAKE_CURRENT_LIST_DIR}/punch_tum.cmake")

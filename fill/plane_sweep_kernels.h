@@ -1,4 +1,4 @@
-// The inner loops of the plane sweep (sfm/plane_sweep.h): warping a view through a plane's
+// The inner loops of the plane sweep (fill/plane_sweep.h): warping a view through a plane's
 // homography fused with window sums, the correlation and cost of a row, and semi-global
 // aggregation. Internal to plane_sweep.cc (and plane_sweep_kernels_test.cc, which alone include
 // it): written as branch-free loops over rows so that they vectorise, and compiled for AVX2 and

@@ -30,7 +30,7 @@
 #include "acquisition/camera.h"
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
-#include "sfm/stereo_fill.h"
+#include "fill/stereo_fill.h"
 
 namespace gf {
 

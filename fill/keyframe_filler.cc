@@ -1,4 +1,4 @@
-#include "sfm/keyframe_filler.h"
+#include "fill/keyframe_filler.h"
 
 #include <chrono>
 #include <opencv2/core.hpp>

@@ -1,4 +1,4 @@
-#include "sfm/plane_sweep.h"
+#include "fill/plane_sweep.h"
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -10,7 +10,7 @@
 #include "acquisition/bounds.h"
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
-#include "sfm/plane_sweep_kernels.h"
+#include "fill/plane_sweep_kernels.h"
 
 namespace gf {
 

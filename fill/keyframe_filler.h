@@ -22,9 +22,9 @@
 #include "acquisition/camera.h"
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
-#include "sfm/fill_carry.h"
-#include "sfm/keyframe_pairs.h"
-#include "sfm/stereo_fill.h"
+#include "fill/fill_carry.h"
+#include "fill/keyframe_pairs.h"
+#include "fill/stereo_fill.h"
 
 namespace gf {
 

@@ -1,4 +1,4 @@
-#include "sfm/fill_carry.h"
+#include "fill/fill_carry.h"
 
 #include <gtest/gtest.h>
 

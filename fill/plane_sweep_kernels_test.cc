@@ -1,5 +1,5 @@
-// The plane sweep's inner loops (sfm/plane_sweep_kernels.h) against their plain definitions.
-#include "sfm/plane_sweep_kernels.h"
+// The plane sweep's inner loops (fill/plane_sweep_kernels.h) against their plain definitions.
+#include "fill/plane_sweep_kernels.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "sfm/rectified_sgbm.h"
+#include "fill/rectified_sgbm.h"
 
 #include <algorithm>
 #include <cmath>

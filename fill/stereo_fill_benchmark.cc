@@ -1,5 +1,5 @@
 // The stereo fill of one keyframe pair on one core, on real frames:
-// `build/sfm/sfm_stereo_fill_benchmark`. Keyframe 1 is frame K of tum_fr1_xyz_head (the argument),
+// `build/fill/fill_stereo_fill_benchmark`. Keyframe 1 is frame K of tum_fr1_xyz_head (the argument),
 // its candidates frames K + 9 and K + 18 (keyframes every third frame, three apart; the camera
 // moves mostly forward there, so the plane sweep serves the pair). Poses as a run gets them:
 // tracked, then refined by pair selection (SelectPartner, not timed), which also chooses the
@@ -16,8 +16,8 @@
 
 #include "acquisition/frame_source.h"
 #include "registration/tracker.h"
-#include "sfm/keyframe_pairs.h"
-#include "sfm/stereo_fill.h"
+#include "fill/keyframe_pairs.h"
+#include "fill/stereo_fill.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-#include "sfm/fill_validation.h"
+#include "fill/fill_validation.h"
 
 #include <algorithm>
 #include <cmath>

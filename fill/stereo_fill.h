@@ -2,14 +2,14 @@
 // tracker knows (the heart of GlassFusion: glass, shiny and dark surfaces that the Kinect cannot
 // measure are still textured in colour).
 //
-// Steps (each method behind DepthCandidates, sfm/depth_candidates.h):
+// Steps (each method behind DepthCandidates, fill/depth_candidates.h):
 //  1. the pair: too short a baseline is refused; a forward pair (the epipole inside an image) goes
-//     to the plane sweep; a sideways one is rectified for SGBM (sfm/rectified_sgbm.h), or goes to
+//     to the plane sweep; a sideways one is rectified for SGBM (fill/rectified_sgbm.h), or goes to
 //     the sweep when that rectification is degenerate (StereoFillResult::path says which);
 //  2. SGBM over the disparities of keyframe 1's measured depth range; its depth next to depth
 //     steps is dropped, and on the rims of the holes it sees into (clear glass) it is held to a
-//     wider step rule (sfm/depth_filters.h); then validated against the sensor and the third view
-//     (sfm/fill_validation.h);
+//     wider step rule (fill/depth_filters.h); then validated against the sensor and the third view
+//     (fill/fill_validation.h);
 //  3. the plane sweep over the holes SGBM found no depth for (or all holes of a forward pair),
 //     leaving projector shadows and the see-through rims alone, filtered and validated the same
 //     way.
@@ -30,15 +30,15 @@
 #include "acquisition/camera.h"
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
-#include "sfm/depth_filters.h"
-#include "sfm/fill_validation.h"
-#include "sfm/plane_sweep.h"
-#include "sfm/rectified_sgbm.h"
+#include "fill/depth_filters.h"
+#include "fill/fill_validation.h"
+#include "fill/plane_sweep.h"
+#include "fill/rectified_sgbm.h"
 
 namespace gf {
 
 // The geometry that decides whether and how a pair can serve stereo; pair selection
-// (sfm/keyframe_pairs.h) and the fill share one copy (the fill stage's `geometry` setting).
+// (fill/keyframe_pairs.h) and the fill share one copy (the fill stage's `geometry` setting).
 struct PairGeometryOptions {
   double min_baseline_m = 0.04;   // shorter baselines give too little parallax, metres
   double epipole_margin_px = 40;  // epipole inside an image or this close to it: forward motion

@@ -1,4 +1,4 @@
-#include "sfm/keyframe_pairs.h"
+#include "fill/keyframe_pairs.h"
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -12,7 +12,7 @@
 #include "acquisition/bounds.h"
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
-#include "sfm/stereo_fill.h"
+#include "fill/stereo_fill.h"
 
 namespace gf {
 namespace {

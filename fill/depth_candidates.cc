@@ -1,4 +1,4 @@
-#include "sfm/depth_candidates.h"
+#include "fill/depth_candidates.h"
 
 #include <cmath>
 

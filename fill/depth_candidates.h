@@ -20,9 +20,9 @@
 #include "acquisition/camera.h"
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
-#include "sfm/fill_validation.h"
-#include "sfm/plane_sweep.h"
-#include "sfm/rectified_sgbm.h"
+#include "fill/fill_validation.h"
+#include "fill/plane_sweep.h"
+#include "fill/rectified_sgbm.h"
 
 namespace gf {
 

@@ -1,4 +1,4 @@
-#include "sfm/stereo_fill.h"
+#include "fill/stereo_fill.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "sfm/stereo_fill.h"
+#include "fill/stereo_fill.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
 #include "acquisition/stats.h"
-#include "sfm/depth_candidates.h"
+#include "fill/depth_candidates.h"
 
 namespace gf {
 namespace {

@@ -1,4 +1,4 @@
-#include "sfm/plane_sweep.h"
+#include "fill/plane_sweep.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "sfm/colmap_io.h"
+#include "fill/colmap_io.h"
 
 #include <cstdio>
 #include <cstring>

@@ -39,7 +39,7 @@
 #include "registration/pair_pose.h"
 #include "registration/ransac.h"
 #include "registration/surf.h"
-#include "sfm/stereo_fill.h"
+#include "fill/stereo_fill.h"
 
 namespace gf {
 

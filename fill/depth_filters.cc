@@ -1,4 +1,4 @@
-#include "sfm/depth_filters.h"
+#include "fill/depth_filters.h"
 
 #include <limits>
 #include <opencv2/imgproc.hpp>

@@ -18,7 +18,7 @@
 #include <string>
 
 #include "acquisition/rgbd_frame.h"
-#include "sfm/fill_validation.h"
+#include "fill/fill_validation.h"
 
 namespace gf {
 

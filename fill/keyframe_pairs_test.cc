@@ -1,9 +1,9 @@
-#include "sfm/keyframe_pairs.h"
+#include "fill/keyframe_pairs.h"
 
 #include <gtest/gtest.h>
 
 #include "datasets/synth.h"
-#include "sfm/stereo_fill.h"
+#include "fill/stereo_fill.h"
 
 namespace gf {
 namespace {

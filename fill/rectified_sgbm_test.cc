@@ -1,4 +1,4 @@
-#include "sfm/rectified_sgbm.h"
+#include "fill/rectified_sgbm.h"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 
 #include "acquisition/depth.h"
 #include "datasets/synth.h"
-#include "sfm/stereo_fill.h"
+#include "fill/stereo_fill.h"
 #include "tests/testing.h"
 
 namespace gf {
