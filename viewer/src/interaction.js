@@ -1,5 +1,6 @@
 // Mouse/touch interaction: one OrbitControls for the shared camera, attached to whichever
-// pane the user is about to drag or scroll, and keyframe picking by click.
+// pane the user is about to drag or scroll, and keyframe picking by click. The events land on
+// each pane's surface (dom.js), the element filling the pane's box under the canvas.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import { pickKeyframe } from './scene_extras.js';
@@ -10,21 +11,21 @@ const PICK_TOLERANCE_PX = 12;  // screen distance to a keyframe centre that stil
 // panes: from createPane; target: initial orbit centre (world, metres);
 // onChange(): camera moved; onPick(index): a keyframe was clicked.
 export function attachSharedControls({ panes, camera, target, keyframes, depth, onChange, onPick }) {
-  const canvases = panes.map((p) => p.layoutPane.canvas);
-  const controls = new OrbitControls(camera, canvases[0]);
+  const surfaces = panes.map((p) => p.layoutPane.surface);
+  const controls = new OrbitControls(camera, surfaces[0]);
   controls.target.copy(target);
   controls.zoomToCursor = true;  // the wheel zooms towards the point under the mouse
   controls.update();
   controls.addEventListener('change', onChange);
 
-  canvases.forEach((canvas) => {
-    const box = canvas.parentElement;
-    // Capture phase on the canvas's parent runs before the canvas's own listeners, so the
-    // controls are on this canvas when its pointerdown/wheel reaches them.
-    const attach = () => { if (controls.domElement !== canvas) controls.connect(canvas); };
+  surfaces.forEach((surface) => {
+    const box = surface.parentElement;
+    // Capture phase on the surface's parent runs before the surface's own listeners, so the
+    // controls are on this surface when its pointerdown/wheel reaches them.
+    const attach = () => { if (controls.domElement !== surface) controls.connect(surface); };
     box.addEventListener('pointerdown', attach, { capture: true });
     box.addEventListener('wheel', attach, { capture: true, passive: true });
-    watchClicks(canvas, (ndc, rect) => {
+    watchClicks(surface, (ndc, rect) => {
       const index = pickAt(keyframes, camera, ndc, rect, depth);
       if (index >= 0) onPick(index);
     });
@@ -33,15 +34,15 @@ export function attachSharedControls({ panes, camera, target, keyframes, depth, 
 }
 
 // Calls onClick(ndc, rect) for a primary-button press and release that hardly moved.
-function watchClicks(canvas, onClick) {
+function watchClicks(element, onClick) {
   let down = null;
-  canvas.addEventListener('pointerdown', (e) => {
+  element.addEventListener('pointerdown', (e) => {
     down = e.button === 0 ? { x: e.clientX, y: e.clientY } : null;
   });
-  canvas.addEventListener('pointerup', (e) => {
+  element.addEventListener('pointerup', (e) => {
     if (!down || Math.hypot(e.clientX - down.x, e.clientY - down.y) > CLICK_MAX_MOVE_PX) return;
     down = null;
-    const rect = canvas.getBoundingClientRect();
+    const rect = element.getBoundingClientRect();
     const ndc = new THREE.Vector2(
       ((e.clientX - rect.left) / rect.width) * 2 - 1,
       -((e.clientY - rect.top) / rect.height) * 2 + 1);

@@ -4,11 +4,14 @@
 // Test hooks: documentElement.dataset.view = "ready" once every pane has drawn its first
 // frame, dataset.viewMs = milliseconds from mount() to then, dataset.pageMs = milliseconds from
 // opening the page to then (reading view_data.js included), and dataset.viewSteps = when
-// each step ended (decoded, parsed, pane created, drawing submitted, drawn), in ms.
+// each step ended (WebGL context created, map decoded, parsed, drawing submitted, drawn), in ms.
 import { buildLayout, setPaneMessage } from './dom.js';
 import { buildToolbar, buildOverlayPanel } from './controls_ui.js';
 import { loadMap } from './load.js';
-import { createPane, resizePane, renderPane, setPaneUniform, waitForPane } from './pane.js';
+import {
+  createRenderer, compileShaders, createPane, resizeRenderer, renderPane, clearCanvas, setPaneUniform, waitForDrawing,
+} from './pane.js';
+import { countSources } from './ply.js';
 import { frustumDepth, poseToMatrix } from './scene_extras.js';
 import { intrinsicsFrom, createViewCamera, sceneSphere, placeInitialView } from './view_camera.js';
 import { attachSharedControls } from './interaction.js';
@@ -69,6 +72,11 @@ async function start(view, layout, t0) {
   const steps = [];  // "what ms" marks since mount(), for dataset.viewSteps
   const mark = (what) => steps.push(`${what} ${Math.round(performance.now() - t0)}`);
   const camera = createViewCamera(view.intr);
+  const renderer = createRenderer(layout.canvas);
+  const redraw = makeRedraw(renderer, layout, camera);
+  redraw.resize();
+  compileShaders(renderer, camera);
+  mark('context');
   const maps = [];
   const panes = [];
   let frame = null;  // { target, depth } once the view is placed
@@ -76,31 +84,30 @@ async function start(view, layout, t0) {
     await nextTask();
     maps.push(loadMap(view.maps[i], { usePlyLoader: view.usePlyLoader }, (what) => mark(`${what}${i}`)));
     setPaneMessage(layout.panes[i], maps[i].message);
-    layout.panes[i].canvas.dataset.surfels = String(maps[i].count);
+    layout.panes[i].box.dataset.surfels = String(maps[i].count);
     // Frame the view on the first map with surfels (with the path and keyframes).
     if (!frame && (maps[i].bounds || i === view.maps.length - 1)) frame = frameView(camera, view, maps[i]);
     while (frame && panes.length < maps.length) {
       const j = panes.length;
       const extras = { trajectory: view.trajectory, keyframes: view.keyframes, camera: view.intr, depth: frame.depth };
-      panes.push(createPane(layout.panes[j], maps[j], maps[j].confRange || [0, 1], extras));
-      resizePane(panes[j], camera);
-      mark(`pane${j}`);
-      renderPane(panes[j], camera);
+      panes.push(createPane(layout.panes[j], maps[j], maps[j].confRange || [0, 1], extras, renderer.maxPointPx));
+      renderPane(renderer, panes[j], camera);
       mark(`submitted${j}`);
     }
   }
-  const redraw = makeRedraw(panes, camera);
+  redraw.setPanes(panes);
   const confRange = mergeRanges(maps.map((m) => m.confRange));
   if (confRange) panes.forEach((p) => setPaneUniform(p, 'uConfRange', new THREE.Vector2(...confRange)));
   addInteraction(view, layout, { maps, panes, camera, frame, confRange, redraw });
   layout.container.gfView = testHandle(view, panes, camera, frame);
-  panes.forEach((p, i) => { waitForPane(p); mark(`drawn${i}`); });
+  waitForDrawing(renderer);
+  mark('drawn');
   const root = document.documentElement;
   root.dataset.viewSteps = steps.join(', ');
   root.dataset.viewMs = String(Math.round(performance.now() - t0));
   root.dataset.pageMs = String(Math.round(performance.now()));  // since the page was opened
   root.dataset.view = 'ready';
-  observeResize(layout, panes, redraw);
+  observeResize(layout, redraw);
 }
 
 // Places the shared camera to frame `map` (may be empty) with the path and keyframes.
@@ -117,7 +124,7 @@ function frameView(camera, view, map) {
 function addInteraction(view, layout, { maps, panes, camera, frame, confRange, redraw }) {
   const showOverlay = buildOverlayPanel(layout.overlay, view.keyframes.length);
   buildToolbar(layout.toolbar, {
-    sourceCounts: sumCounts(maps.map((m) => m.sourceCounts)),
+    sourceCounts: sumCounts(maps.filter((m) => m.surfels).map((m) => countSources(m.surfels))),
     confRange,
     hasPath: view.trajectory.length >= 2 || view.keyframes.length > 0,
   }, toolbarHandlers(panes, redraw));
@@ -138,37 +145,51 @@ function testHandle(view, panes, camera, frame) {
   return {
     keyframeClientPoint(index, pane) {
       const p = new THREE.Vector3(0, 0, frame.depth / 2).applyMatrix4(view.keyframes[index].matrix).project(camera);
-      const rect = panes[pane].layoutPane.canvas.getBoundingClientRect();
+      const rect = panes[pane].layoutPane.box.getBoundingClientRect();
       return { x: rect.left + ((p.x + 1) / 2) * rect.width, y: rect.top + ((1 - p.y) / 2) * rect.height };
     },
   };
 }
 
 // Redraw scheduling: request() draws all panes on the next animation frame (once however
-// often it is called); resize() matches the panes to their boxes and the camera's aspect.
-function makeRedraw(panes, camera) {
+// often it is called); resize() matches the canvas to its box and the camera's aspect to the
+// panes' (all panes are the same size). changed(): whether the canvas or a pane box has
+// changed size since the last resize().
+function makeRedraw(renderer, layout, camera) {
+  let panes = [];
   let pending = false;
-  const draw = () => { pending = false; panes.forEach((p) => renderPane(p, camera)); };
+  let size = '';
+  const sizeNow = () => [layout.canvas, ...layout.panes.map((p) => p.box)]
+    .map((e) => `${e.clientWidth}x${e.clientHeight}`).join(' ');
+  const draw = () => {
+    pending = false;
+    clearCanvas(renderer);
+    panes.forEach((p) => renderPane(renderer, p, camera));
+  };
   return {
+    setPanes(list) { panes = list; },
     request() { if (!pending) { pending = true; requestAnimationFrame(draw); } },
+    changed: () => sizeNow() !== size,
     resize() {
-      const aspects = panes.map((p) => resizePane(p, camera));
-      camera.aspect = aspects[0];
+      size = sizeNow();
+      resizeRenderer(renderer);
+      const box = layout.panes[0].box;
+      camera.aspect = Math.max(1, box.clientWidth) / Math.max(1, box.clientHeight);
       camera.updateProjectionMatrix();
     },
   };
 }
 
-// Resizes and redraws when a pane's box changes size (window resize, a scrollbar appearing,
-// a collapsed report section opened).
-function observeResize(layout, panes, redraw) {
+// Resizes and redraws when the canvas or a pane's box changes size (window resize, a
+// scrollbar appearing, a collapsed report section opened).
+function observeResize(layout, redraw) {
   if (typeof ResizeObserver === 'undefined') return;
   const observer = new ResizeObserver(() => {
-    if (panes.every((p) => p.size === `${p.layoutPane.box.clientWidth}x${p.layoutPane.box.clientHeight}`)) return;
+    if (!redraw.changed()) return;
     redraw.resize();
     redraw.request();
   });
-  layout.panes.forEach((p) => observer.observe(p.box));
+  [layout.canvas, ...layout.panes.map((p) => p.box)].forEach((e) => observer.observe(e));
 }
 
 // The toolbar's effects on the panes.

@@ -10,8 +10,15 @@ import { MAX_SOURCE_ID, sourceColorTable } from './sources.js';
 export const COLOR_MODES = { rgb: 0, source: 1, confidence: 2 };
 
 const VERTEX_SHADER = /* glsl */ `
-attribute vec4 srgbSource;       // surfel colour (0..255 sRGB) and DepthSource number
-attribute vec2 radiusConfidence; // disc radius (metres), accumulated measurement weight
+// One vertex per surfel row (ply.js): each property's bytes as unsigned bytes, not normalised
+// (0..255), so the shader reads the file's rows as they are.
+attribute vec4 xBytes;           // position (world frame, metres): float32 little-endian bytes
+attribute vec4 yBytes;
+attribute vec4 zBytes;
+attribute vec3 rgbBytes;         // surfel colour, 0..255 sRGB
+attribute vec4 radiusBytes;      // disc radius (metres), float32 bytes
+attribute vec4 confidenceBytes;  // accumulated measurement weight, float32 bytes
+attribute float sourceByte;      // DepthSource number
 
 uniform float uFocalPx;     // focal length of the view, framebuffer pixels
 uniform float uMinPointPx;  // clamp of the disc diameter, framebuffer pixels
@@ -23,6 +30,12 @@ uniform vec2 uConfRange;    // confidence mapped to the ends of the ramp
 
 varying vec3 vColor;
 varying float vSizePx;
+
+// The float32 whose little-endian bytes are b (each 0..255).
+float floatFromBytes(vec4 b) {
+  uvec4 u = uvec4(b);
+  return uintBitsToFloat(u.x | (u.y << 8) | (u.z << 16) | (u.w << 24));
+}
 
 // Confidence ramp, low to high: dark purple, blue, teal, yellow-green, yellow.
 vec3 confidenceRamp(float t) {
@@ -39,9 +52,7 @@ vec3 confidenceRamp(float t) {
 }
 
 void main() {
-  int s = clamp(int(srgbSource.a + 0.5), 0, ${MAX_SOURCE_ID});
-  float radius = radiusConfidence.x;
-  float confidence = radiusConfidence.y;
+  int s = clamp(int(sourceByte + 0.5), 0, ${MAX_SOURCE_ID});
   if (((uSourceMask >> s) & 1) == 0) {
     // Hidden source: put the point outside the clip volume so it is not rasterised.
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
@@ -50,17 +61,19 @@ void main() {
     vSizePx = 1.0;
     return;
   }
-  vec4 viewPos = modelViewMatrix * vec4(position, 1.0);
+  vec3 surfelPosition = vec3(floatFromBytes(xBytes), floatFromBytes(yBytes), floatFromBytes(zBytes));
+  vec4 viewPos = modelViewMatrix * vec4(surfelPosition, 1.0);
   gl_Position = projectionMatrix * viewPos;
   float depth = max(-viewPos.z, 1e-4);
-  vSizePx = clamp(2.0 * radius * uFocalPx / depth, uMinPointPx, uMaxPointPx);
+  vSizePx = clamp(2.0 * floatFromBytes(radiusBytes) * uFocalPx / depth, uMinPointPx, uMaxPointPx);
   gl_PointSize = vSizePx;
   if (uColorMode == 1) {
     vColor = uSourceColors[s];
   } else if (uColorMode == 2) {
+    float confidence = floatFromBytes(confidenceBytes);
     vColor = confidenceRamp((confidence - uConfRange.x) / max(uConfRange.y - uConfRange.x, 1e-6));
   } else {
-    vColor = srgbSource.rgb / 255.0;
+    vColor = rgbBytes / 255.0;
   }
 }
 `;

@@ -1,16 +1,25 @@
-// Reading a pane's WebGL canvas back inside the page (the renderer keeps its drawing buffer):
-// the canvas is drawn into a 2D canvas and its pixels compared there; only counts come back.
+// Reading a pane's picture back inside the page: every pane is drawn into one WebGL canvas
+// over the row of panes (the renderer keeps its drawing buffer); the part of it over the
+// pane's box (<div data-pane="i">, edges rounded to whole canvas pixels) is drawn into a 2D
+// canvas and its pixels compared there; only counts come back.
 
 // Defines window.__gfPanePixels(index) -> RGBA bytes of pane `index`. Call once per page.
 export function installPixelReader(page) {
   return page.evaluate(() => {
     window.__gfPanePixels = (paneIndex) => {
-      const canvas = document.querySelector(`canvas[data-pane="${paneIndex}"]`);
+      const box = document.querySelector(`[data-pane="${paneIndex}"]`);
+      const canvas = box.closest('.gf-panes').querySelector('canvas.gf-canvas');
+      const c = canvas.getBoundingClientRect();
+      const b = box.getBoundingClientRect();
+      const sx = canvas.width / c.width;
+      const sy = canvas.height / c.height;
+      const x = Math.round((b.left - c.left) * sx);
+      const y = Math.round((b.top - c.top) * sy);
       const copy = document.createElement('canvas');
-      copy.width = canvas.width;
-      copy.height = canvas.height;
-      const ctx = copy.getContext('2d');
-      ctx.drawImage(canvas, 0, 0);
+      copy.width = Math.round((b.right - c.left) * sx) - x;
+      copy.height = Math.round((b.bottom - c.top) * sy) - y;
+      const ctx = copy.getContext('2d', { willReadFrequently: true });
+      ctx.drawImage(canvas, x, y, copy.width, copy.height, 0, 0, copy.width, copy.height);
       return ctx.getImageData(0, 0, copy.width, copy.height).data;
     };
   });
@@ -21,7 +30,7 @@ export function installPixelReader(page) {
 export function countPixels(page, paneIndex, rgb, tol = 6) {
   return page.evaluate(({ paneIndex, rgb, tol }) => {
     const px = window.__gfPanePixels(paneIndex);
-    const bg = parseInt(document.querySelector(`canvas[data-pane="${paneIndex}"]`).dataset.bg.slice(1), 16);
+    const bg = parseInt(document.querySelector(`[data-pane="${paneIndex}"]`).dataset.bg.slice(1), 16);
     const bgRgb = [(bg >> 16) & 255, (bg >> 8) & 255, bg & 255];
     const near = (i, c, t) => Math.abs(px[i] - c[0]) <= t && Math.abs(px[i + 1] - c[1]) <= t && Math.abs(px[i + 2] - c[2]) <= t;
     let differing = 0;

@@ -62,10 +62,10 @@ async function openReport(browser, report, plyLoader) {
   return page;
 }
 
-// The panes: [{ index, name, surfels }] from the canvases' data attributes.
-const listPanes = (page) => page.$$eval('canvas[data-pane]', (cs) => cs.map((c) => ({
-  index: Number(c.dataset.pane), name: c.dataset.mapName || '', maxPointPx: c.dataset.maxPointPx,
-  surfels: Number(c.dataset.surfels), message: c.parentElement.querySelector('.gf-msg')?.textContent || '' })));
+// The panes: [{ index, name, surfels }] from the pane boxes' data attributes.
+const listPanes = (page) => page.$$eval('[data-pane]', (boxes) => boxes.map((b) => ({
+  index: Number(b.dataset.pane), name: b.dataset.mapName || '', maxPointPx: b.dataset.maxPointPx,
+  surfels: Number(b.dataset.surfels), message: b.querySelector('.gf-msg')?.textContent || '' })));
 
 async function runChecks(page, opts, checks, shot) {
   const state = await page.evaluate(() => ({ ...document.documentElement.dataset }));
@@ -158,7 +158,7 @@ async function checkKeyframeClick(page, checks) {
 // (f) dragging in the last pane turns the shared camera: the first pane's picture changes.
 async function checkSharedCamera(page, panes, checks) {
   const last = panes[panes.length - 1];
-  const box = await page.locator(`canvas[data-pane="${last.index}"]`).boundingBox();
+  const box = await page.locator(`[data-pane="${last.index}"]`).boundingBox();
   await rememberPixels(page, panes[0].index);
   await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
   await page.mouse.down();
