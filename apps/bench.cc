@@ -114,8 +114,8 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
     const StereoFillResult& r = k.stereo;
     fill_ms.push_back(k.stereo_ms);
     filled += r.filled_pixels;
-    ++methods[r.method.empty() ? r.termination : r.method];
-    ++paths[r.path];
+    ++methods[r.method == FillMethod::kNone ? r.termination : FillMethodName(r.method)];
+    ++paths[PairPathName(r.path)];
     if (r.rectification.usable) {
       const std::optional<double> ms =
           TimeOpenCvSgbm(k.key->frame, k.partner->frame, camera, r.rectification,

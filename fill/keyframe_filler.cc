@@ -117,8 +117,8 @@ void KeyframeFiller::Stereo(FillTask* task) const {
       const StereoFillResult& r = out.stereo;
       k.partner = KeyframeName(job.key2->frame);
       if (job.third) k.third = KeyframeName(job.third->frame);
-      k.method = r.method;
-      k.path = r.path;
+      k.method = FillMethodName(r.method);
+      k.path = PairPathName(r.path);
       k.sgbm_refused = r.sgbm_refused;
       k.sgbm_rescaled = r.rectification.usable && r.rectification.rescaled;
       k.sgbm_vertical = r.rectification.usable && r.rectification.vertical;

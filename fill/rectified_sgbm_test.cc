@@ -151,8 +151,8 @@ TEST(FillHolesByStereo, FillsAMostlyVerticalPair) {
   const StereoFillResult sgbm = FillHolesByStereo(key1, key2, camera, key1_from_key2, sgbm_only);
   {
     SCOPED_TRACE(sgbm.BriefReport() + "; " + sgbm.rectification.BriefReport());
-    EXPECT_EQ(sgbm.path, "rectified_sgbm");
-    EXPECT_EQ(sgbm.method, "rectified SGBM");
+    EXPECT_EQ(sgbm.path, PairPath::kRectifiedSgbm);
+    EXPECT_EQ(sgbm.method, FillMethod::kRectifiedSgbm);
     EXPECT_TRUE(sgbm.rectification.vertical);
     ASSERT_TRUE(sgbm.success);
     EXPECT_GT(sgbm.filled_pixels, sgbm.hole_pixels / 20);
@@ -245,9 +245,10 @@ TEST(FillHolesByStereo, SurvivesRandomPairGeometries) {
     StereoFillResult r;
     ASSERT_NO_THROW(r = FillHolesByStereo(key1, key2, camera, key1_from_key2, {}, third));
     EXPECT_FALSE(r.termination.empty());
-    EXPECT_EQ(paths.count(r.path), 1u) << r.path;
-    ++seen[r.path];
-    if (r.path == "none") ++seen["none: " + r.termination];
+    const std::string path = PairPathName(r.path);
+    EXPECT_EQ(paths.count(path), 1u) << path;
+    ++seen[path];
+    if (r.path == PairPath::kNone) ++seen["none: " + r.termination];
     // Measured pixels are never changed, whatever the geometry.
     EXPECT_EQ(cv::norm(r.filled_depth, key1.depth, cv::NORM_INF, key1.hole_mask == 0), 0.0);
   }

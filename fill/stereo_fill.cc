@@ -118,6 +118,28 @@ bool StereoFillOptions::Check(std::string* message) const {
   return c.ok();
 }
 
+const char* PairPathName(PairPath path) {
+  switch (path) {
+    case PairPath::kRectifiedSgbm: return "rectified_sgbm";
+    case PairPath::kPlaneSweepForward: return "plane_sweep_forward";
+    case PairPath::kPlaneSweepDegenerateRectification:
+      return "plane_sweep_degenerate_rectification";
+    case PairPath::kPlaneSweepRequested: return "plane_sweep_requested";
+    case PairPath::kNone: break;
+  }
+  return "none";
+}
+
+const char* FillMethodName(FillMethod method) {
+  switch (method) {
+    case FillMethod::kRectifiedSgbm: return "rectified SGBM";
+    case FillMethod::kPlaneSweep: return "plane sweep";
+    case FillMethod::kSgbmThenSweep: return "rectified SGBM + plane sweep";
+    case FillMethod::kNone: break;
+  }
+  return "";
+}
+
 std::string StereoFillResult::BriefReport() const {
   char buffer[400];
   std::snprintf(
@@ -125,7 +147,7 @@ std::string StereoFillResult::BriefReport() const {
       "stereo fill (%s) %s: %d of %d hole pixels filled (%.1f%%), stereo vs sensor median "
       "error %.2f%% (%.1f mm); rejected by ring %d, by shadow geometry %d, by %s %d, seen through "
       "by another keyframe %d",
-      method.c_str(), termination.c_str(), filled_pixels, hole_pixels,
+      FillMethodName(method), termination.c_str(), filled_pixels, hole_pixels,
       hole_pixels ? 100.0 * filled_pixels / hole_pixels : 0.0, 100.0 * stereo_error_median,
       1000.0 * stereo_error_median_m, rejected_by_ring, rejected_by_shadow,
       third_view_used ? "third view" : "(no third view)", rejected_by_photometry,
@@ -174,14 +196,16 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
                 PhotometricCheck(key1, third, camera, options.photometric), {}, {}};
   result.third_view_used = c.photometric.active();
   bool sgbm = !forward && !options.plane_sweep_always;
-  result.path = forward ? "plane_sweep_forward" : sgbm ? "rectified_sgbm" : "plane_sweep_requested";
+  result.path = forward ? PairPath::kPlaneSweepForward
+                : sgbm  ? PairPath::kRectifiedSgbm
+                        : PairPath::kPlaneSweepRequested;
   if (sgbm) {
     result.rectification = RectifyForSgbm(camera, key1_from_key2, pair.near_m, pair.far_m,
                                           options.sgbm);
     if (!result.rectification.usable) {
       // A degenerate rectification: the plane sweep, which needs none, fills the pair.
       sgbm = false;
-      result.path = "plane_sweep_degenerate_rectification";
+      result.path = PairPath::kPlaneSweepDegenerateRectification;
       result.sgbm_refused = result.rectification.refusal;
     }
   }
@@ -189,15 +213,15 @@ StereoFillResult FillHolesByStereo(const RgbdFrame& key1, const RgbdFrame& key2,
   cv::Mat rim;          // the rims of the holes SGBM sees into (empty: none)
   cv::Mat sgbm_filled;  // the pixels SGBM filled
   if (sgbm) {
-    result.method = "rectified SGBM";
+    result.method = FillMethod::kRectifiedSgbm;
     agrees = FillBySgbm(result.rectification, &c, &result, &rim);
     sgbm_filled = result.fill_mask.clone();
   }
   if (!sgbm || options.plane_sweep_after_sgbm) {
-    if (!sgbm) result.method = "plane sweep";
+    if (!sgbm) result.method = FillMethod::kPlaneSweep;
     const cv::Mat wanted = SweepWanted(key1, sgbm, rim, options, result);
     if (cv::countNonZero(wanted) > 0) {
-      if (sgbm) result.method = "rectified SGBM + plane sweep";
+      if (sgbm) result.method = FillMethod::kSgbmThenSweep;
       agrees |= FillBySweep(wanted, &c, &result);
     }
   }

@@ -72,14 +72,30 @@ struct StereoFillOptions {
   bool Check(std::string* message = nullptr) const;
 };
 
+// How a pair was served; PairPathName gives report.json's key for it.
+enum class PairPath {
+  kNone,                               // "none": the pair was not used
+  kRectifiedSgbm,                      // "rectified_sgbm"
+  kPlaneSweepForward,                  // "plane_sweep_forward": the epipole lies in an image
+  kPlaneSweepDegenerateRectification,  // "plane_sweep_degenerate_rectification" (sgbm_refused)
+  kPlaneSweepRequested,                // "plane_sweep_requested" (plane_sweep_always)
+};
+const char* PairPathName(PairPath path);
+
+// What filled the pair's holes; FillMethodName gives its name ("" for kNone).
+enum class FillMethod {
+  kNone,
+  kRectifiedSgbm,  // "rectified SGBM"
+  kPlaneSweep,     // "plane sweep"
+  kSgbmThenSweep,  // "rectified SGBM + plane sweep": the sweep over the holes SGBM left
+};
+const char* FillMethodName(FillMethod method);
+
 struct StereoFillResult : DepthFill {
   bool success = false;
   std::string termination;  // "ok" or why the pair was not used
-  std::string method;       // "rectified SGBM", "plane sweep", "rectified SGBM + plane sweep"
-  // How the pair was served, as report.json counts pairs: "rectified_sgbm", "plane_sweep_forward"
-  // (epipole in an image), "plane_sweep_degenerate_rectification" (sgbm_refused says why),
-  // "plane_sweep_requested" (plane_sweep_always), or "none" (the pair was not used).
-  std::string path = "none";
+  FillMethod method = FillMethod::kNone;
+  PairPath path = PairPath::kNone;
   std::string sgbm_refused;         // SgbmRectification::refusal for degenerate sideways pairs
   SgbmRectification rectification;  // of sideways pairs (BriefReport() for the log)
   cv::Mat stereo_depth;             // CV_32F metres in keyframe 1's image, 0 = none (all stereo)

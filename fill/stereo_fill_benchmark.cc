@@ -75,7 +75,7 @@ void BM_FillHolesByStereo(benchmark::State& state) {
                               choice.partner_pose.key1_from_key2, gf::StereoFillOptions{}, third);
   }
   state.counters["filled_pixels"] = result.success ? cv::countNonZero(result.fill_mask) : 0;
-  state.SetLabel(result.path + ": " + result.termination);
+  state.SetLabel(std::string(PairPathName(result.path)) + ": " + result.termination);
 }
 BENCHMARK(BM_FillHolesByStereo)
     ->Arg(0)

@@ -176,8 +176,8 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   sgbm_only.plane_sweep_after_sgbm = false;
   const StereoFillResult r = FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, sgbm_only);
   ASSERT_TRUE(r.success) << r.BriefReport();
-  EXPECT_EQ(r.method, "rectified SGBM");
-  EXPECT_EQ(r.path, "rectified_sgbm");
+  EXPECT_EQ(r.method, FillMethod::kRectifiedSgbm);
+  EXPECT_EQ(r.path, PairPath::kRectifiedSgbm);
   // Measured pixels are never changed.
   EXPECT_EQ(cv::norm(r.filled_depth, a.frame.depth, cv::NORM_INF, measured), 0.0);
   EXPECT_EQ(cv::countNonZero(r.fill_mask & measured), 0);
@@ -198,7 +198,7 @@ TEST(FillHolesByStereo, FillsGlassAndShinyHolesOnTheSyntheticTable) {
   const StereoFillResult d =
       FillHolesByStereo(a.frame, b.frame, camera, key1_from_key2, StereoFillOptions{}, third);
   ASSERT_TRUE(d.success) << d.BriefReport();
-  EXPECT_EQ(d.method, "rectified SGBM + plane sweep");
+  EXPECT_EQ(d.method, FillMethod::kSgbmThenSweep);
   EXPECT_EQ(cv::norm(d.filled_depth, a.frame.depth, cv::NORM_INF, measured), 0.0);
   EXPECT_GE(d.filled_pixels, r3.filled_pixels) << r3.BriefReport();
   const FillScore sd = Score(a, d);
@@ -340,7 +340,7 @@ TEST(FillHolesByStereo, RejectsShortBaselinesAndForwardMotion) {
   EXPECT_EQ(cv::norm(r.filled_depth, f.depth, cv::NORM_INF), 0.0);
   // With the plane sweep, a textureless pair yields no depth and changes nothing.
   const StereoFillResult swept = FillHolesByStereo(f, f, cam, forward, {});
-  EXPECT_EQ(swept.method, "plane sweep");
+  EXPECT_EQ(swept.method, FillMethod::kPlaneSweep);
   EXPECT_EQ(swept.filled_pixels, 0);
   EXPECT_EQ(cv::norm(swept.filled_depth, f.depth, cv::NORM_INF), 0.0);
 }
