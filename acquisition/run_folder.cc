@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -339,6 +340,19 @@ std::vector<std::string> RunFolder::ReadMarker(const std::string& dir) {
         entries.push_back(line);
   }
   return entries;
+}
+
+std::string IndexedFileName(int number, const std::string& timestamp) {
+  char prefix[16];
+  std::snprintf(prefix, sizeof(prefix), "%06d", number);
+  return prefix + (timestamp.empty() ? "" : "_" + timestamp) + ".png";
+}
+
+std::string StampOfIndexedName(const std::string& name) {
+  const size_t underscore = name.find('_');
+  const size_t dot = name.rfind(".png");
+  if (underscore == std::string::npos || dot == std::string::npos || dot <= underscore) return "";
+  return name.substr(underscore + 1, dot - underscore - 1);
 }
 
 }  // namespace gf

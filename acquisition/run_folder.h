@@ -107,4 +107,10 @@ class RunFolder {
   std::set<std::string> seen_;     // folders known to exist (checked once, then trusted)
 };
 
+// An image named by a number and a timestamp, <number:06d>_<ts>.png (<number:06d>.png without a
+// timestamp): undistorted/'s files (the frame's index) and colmap-export's (the image id). Sorted
+// by name, they are in number order. StampOfIndexedName gives the timestamp back ("" when none).
+std::string IndexedFileName(int number, const std::string& timestamp);
+std::string StampOfIndexedName(const std::string& name);
+
 }  // namespace gf

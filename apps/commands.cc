@@ -8,7 +8,7 @@
 #include "acquisition/trajectory_metrics.h"
 #include "apps/bench.h"
 #include "apps/capture.h"
-#include "apps/colmap.h"
+#include "fill/colmap_workspace.h"
 #include "apps/compare.h"
 #include "apps/demo.h"
 #include "apps/info.h"

@@ -45,19 +45,6 @@ RunFolder::Options Earlier(bool replace) {
 
 }  // namespace
 
-std::string IndexedFileName(int number, const std::string& timestamp) {
-  char prefix[16];
-  std::snprintf(prefix, sizeof(prefix), "%06d", number);
-  return prefix + (timestamp.empty() ? "" : "_" + timestamp) + ".png";
-}
-
-std::string StampOfIndexedName(const std::string& name) {
-  const size_t underscore = name.find('_');
-  const size_t dot = name.rfind(".png");
-  if (underscore == std::string::npos || dot == std::string::npos || dot <= underscore) return "";
-  return name.substr(underscore + 1, dot - underscore - 1);
-}
-
 int CompleteFromModel(const cv::Mat& hole_mask, const MapCompletion& offer, cv::Mat* filled_depth,
                       cv::Mat* confidence, cv::Mat* completed) {
   const cv::Mat& model_depth = offer.depth;

@@ -159,12 +159,6 @@ class InMemoryRunSink : public RunSink {
   std::mutex mutex_;
 };
 
-// An image named by a number and a timestamp, <number:06d>_<ts>.png (<number:06d>.png without a
-// timestamp): undistorted/'s files (the frame's index) and colmap-export's (the image id). Sorted
-// by name, they are in number order. StampOfIndexedName gives the timestamp back ("" when none).
-std::string IndexedFileName(int number, const std::string& timestamp);
-std::string StampOfIndexedName(const std::string& name);
-
 // Sets *filled_depth (CV_32F metres) to offer.depth (same size, 0 = none) on the pixels of
 // hole_mask (CV_8U, non-zero: the sensor's holes; not projector shadows) that it leaves empty and
 // where no sensor pixel (hole_mask 0) within offer.occluder_px lies in front of the offered depth

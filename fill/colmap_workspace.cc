@@ -1,4 +1,4 @@
-#include "apps/colmap.h"
+#include "fill/colmap_workspace.h"
 
 #include <spdlog/spdlog.h>
 
@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "acquisition/bounds.h"
 #include "acquisition/camera.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
@@ -17,9 +18,7 @@
 #include "acquisition/run_folder.h"
 #include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
-#include "pipeline/run_sink.h"
 #include "fill/colmap_io.h"
-#include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;
 
