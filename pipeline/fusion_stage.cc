@@ -244,8 +244,7 @@ void FusionStage::ApplyCorrections(std::map<int, SE3> latest, int version) {
 }
 
 void FusionStage::PrepareRenders() {
-  GF_CHECK(!maps_.empty(), "fusion stage: no map to render");
-  maps_.front().fusion.SettleChunks();
+  if (!maps_.empty()) maps_.front().fusion.SettleChunks();  // (none: RenderFills says so)
 }
 
 MapCompletion FusionStage::RenderFills(const SE3& world_from_camera) {

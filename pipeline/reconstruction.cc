@@ -191,7 +191,9 @@ json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajector
   std::atomic<size_t> next{0};
   std::atomic<bool> stopped{false};
   auto work = [&](bool asks) {
-    while (!(asks && stop() && (stopped = true)) && !stopped) {
+    for (;;) {
+      if (asks && stop()) stopped = true;
+      if (stopped) return;
       const size_t i = next++;
       if (i >= results.size()) return;
       results[i] = CompleteOne(keyframes_filled[i], poses, fusion, sink);
