@@ -86,35 +86,21 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PoseGraphOptions, max_loop_chi2, loop_huber, 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(LoopStageOptions, database, detector, graph, queue_capacity,
                                    odometry_noise, gap_sigma_m, gap_sigma_deg,
                                    relocalise_candidates, free_keyframes)
-// The fusion stage's settings and its map's (FusionOptions) side by side under "fusion" (their
-// names differ); the glass settings have their own place ("glass").
-void to_json(nlohmann::json& j, const FusionStageOptions& o) {
-  j = o.fusion;
-  j["queue_capacity"] = o.queue_capacity;
-  j["count_every"] = o.count_every;
-  j["fuse_carried"] = o.fuse_carried;
-  j["complete_keyframes"] = o.complete_keyframes;
-  j["completion_max_gap_px"] = o.completion_max_gap_px;
-  j["completion_max_angle_deg"] = o.completion_max_angle_deg;
-  j["completion_min_support"] = o.completion_min_support;
-  j["completion_occluder_px"] = o.completion_occluder_px;
-  j["completion_support_half"] = o.completion_support_half;
-}
-
-void from_json(const nlohmann::json& j, FusionStageOptions& o) {
-  j.get_to(o.fusion);
-  j.at("queue_capacity").get_to(o.queue_capacity);
-  j.at("count_every").get_to(o.count_every);
-  j.at("fuse_carried").get_to(o.fuse_carried);
-  j.at("complete_keyframes").get_to(o.complete_keyframes);
-  j.at("completion_max_gap_px").get_to(o.completion_max_gap_px);
-  j.at("completion_max_angle_deg").get_to(o.completion_max_angle_deg);
-  j.at("completion_min_support").get_to(o.completion_min_support);
-  j.at("completion_occluder_px").get_to(o.completion_occluder_px);
-  j.at("completion_support_half").get_to(o.completion_support_half);
-}
+// The stage's own settings; its map's (FusionOptions) stand beside them under "fusion"
+// (SettingsTree, ApplyConfig: their names differ), the glass settings at "glass".
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionStageOptions, queue_capacity, count_every, fuse_carried,
+                                   complete_keyframes, completion_max_gap_px,
+                                   completion_max_angle_deg, completion_min_support,
+                                   completion_occluder_px, completion_support_half)
 
 namespace {
+
+// "fusion": the stage's settings and its map's, side by side.
+nlohmann::json FusionTree(const FusionStageOptions& o) {
+  nlohmann::json tree = o;
+  tree.update(nlohmann::json(o.fusion));
+  return tree;
+}
 
 // Every setting, as a config file gives them (keys sorted).
 nlohmann::json SettingsTree(const ReconstructionOptions& o) {
@@ -126,7 +112,7 @@ nlohmann::json SettingsTree(const ReconstructionOptions& o) {
             {"pairs", fill.pairs},
             {"stereo", fill.stereo},
             {"carry", fill.carry}}},
-          {"fusion", o.fusion_options},
+          {"fusion", FusionTree(o.fusion_options)},
           {"glass", o.fusion_options.fusion.glass},
           {"loop_closure", o.loop_options}};
 }
@@ -216,6 +202,7 @@ void ApplyConfig(const std::string& text, const std::string& path, Reconstructio
     fill.at("stereo").get_to(f.stereo);
     fill.at("carry").get_to(f.carry);
     merged.at("fusion").get_to(o.fusion_options);
+    merged.at("fusion").get_to(o.fusion_options.fusion);
     merged.at("glass").get_to(o.fusion_options.fusion.glass);
     merged.at("loop_closure").get_to(o.loop_options);
   } catch (const nlohmann::json::exception& e) {
