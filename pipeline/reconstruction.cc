@@ -3,13 +3,13 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <map>
 #include <thread>
 
 #include "acquisition/errors.h"
+#include "pipeline/map_completion.h"
 #include "pipeline/settings.h"
 #include "pipeline/stages.h"
 #include "pipeline/timing.h"
@@ -142,93 +142,6 @@ Trajectory CorrectedTrajectory(const TrackingRecord& tracking, const PoseCorrect
     out[i].world_from_camera =
         PoseCorrections::Lookup(c, tracking.keyframe[i]) * out[i].world_from_camera;
   return out;
-}
-
-// One keyframe's completion from the map (CompleteFromMap).
-struct KeyframeCompletion {
-  bool done = false;      // asked for (a stop leaves the rest undone)
-  int completed = 0;      // pixels
-  int glass = 0;          // pixels the map's transparent surfels cover
-  std::string warning;    // why it could not be completed
-};
-
-KeyframeCompletion CompleteOne(const KeyframeFill& k, const std::map<std::string, SE3>& poses,
-                               FusionStage* fusion, RunSink* sink) {
-  KeyframeCompletion out;
-  out.done = true;
-  const auto pose = poses.find(k.timestamp);
-  if (!k.failure.empty() || pose == poses.end()) return out;
-  try {
-    const MapCompletion offer = fusion->RenderFills(pose->second);
-    out.glass = offer.glass.empty() ? 0 : cv::countNonZero(offer.glass);
-    out.completed = sink->CompleteKeyframe(k.timestamp, offer);
-  } catch (const std::exception& e) {
-    out.warning = "keyframe " + k.timestamp + " not completed from the model: " + e.what();
-  }
-  return out;
-}
-
-// Each filled keyframe's holes that its own fill left empty, completed from the final model's
-// fills at the keyframe's final pose, on every core (the keyframes are independent, so the
-// outputs do not depend on which thread did which). A keyframe that cannot be completed stays as
-// its fill left it (a warning); the others go on. `stop` is asked on this thread between its
-// keyframes (true: the keyframes not started stay as they are). report.json's
-// fill.model_completion.
-json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajectory& trajectory,
-                     const std::vector<std::string>& names, RunSink* sink,
-                     const std::function<bool()>& stop, std::vector<std::string>* warnings) {
-  std::map<std::string, SE3> poses;  // by frame name (trajectory entry i is frame names[i])
-  for (size_t i = 0; i < trajectory.size() && i < names.size(); ++i)
-    poses[names[i]] = trajectory[i].world_from_camera;
-  const auto start = Clock::now();
-  const std::vector<KeyframeFill> keyframes_filled = fill.keyframes();
-  std::vector<std::string> to_complete;
-  for (const KeyframeFill& k : keyframes_filled)
-    if (k.failure.empty() && poses.count(k.timestamp)) to_complete.push_back(k.timestamp);
-  sink->PrepareCompletion(to_complete);
-  fusion->PrepareRenders();
-  std::vector<KeyframeCompletion> results(keyframes_filled.size());
-  std::atomic<size_t> next{0};
-  std::atomic<bool> stopped{false};
-  auto work = [&](bool asks) {
-    for (;;) {
-      if (asks && stop()) stopped = true;
-      if (stopped) return;
-      const size_t i = next++;
-      if (i >= results.size()) return;
-      results[i] = CompleteOne(keyframes_filled[i], poses, fusion, sink);
-    }
-  };
-  const size_t helpers =
-      std::min<size_t>({std::max(1u, std::thread::hardware_concurrency()) - 1, 7,
-                        results.size()});
-  std::vector<std::thread> threads;
-  for (size_t t = 0; t < helpers; ++t) threads.emplace_back(work, false);
-  work(true);
-  for (std::thread& t : threads) t.join();
-  int keyframes = 0, done = 0, glass_keyframes = 0;
-  long pixels = 0, glass_pixels = 0;
-  for (const KeyframeCompletion& r : results) {
-    done += r.done;
-    keyframes += r.completed > 0;
-    pixels += r.completed;
-    glass_keyframes += r.glass > 0;
-    glass_pixels += r.glass;
-    if (r.warning.empty()) continue;
-    warnings->push_back(r.warning);
-    spdlog::warn("{}", r.warning);
-  }
-  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  spdlog::info("model completion: {} hole pixels of {} keyframes from the map's fills, {:.1f} s",
-               pixels, keyframes, seconds);
-  return {{"keyframes", keyframes},
-          {"pixels", pixels},
-          {"seconds", seconds},
-          {"stopped", stopped.load()},
-          {"keyframes_done", done},
-          {"keyframes_to_do", static_cast<int>(keyframes_filled.size())},
-          {"glass_keyframes", glass_keyframes},
-          {"glass_pixels", glass_pixels}};
 }
 
 // Runs `finish`, keeping the first error of the run.

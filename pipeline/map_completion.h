@@ -1,0 +1,30 @@
+// The map's completion of the keyframes, the last step of a run with fill and fusion (called by
+// Reconstruction::Run after the stages have finished).
+#pragma once
+
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "acquisition/trajectory.h"
+#include "pipeline/fill_stage.h"
+#include "pipeline/fusion_stage.h"
+#include "pipeline/run_sink.h"
+
+namespace gf {
+
+// Each filled keyframe's holes that its own fill left empty, completed from the final model's
+// fills at the keyframe's final pose, on every core (the keyframes are independent, so the
+// outputs do not depend on which thread did which). A keyframe that cannot be completed stays as
+// its fill left it (a warning); the others go on. `stop` is asked on this thread between its
+// keyframes (true: the keyframes not started stay as they are). report.json's
+// fill.model_completion.
+// `names[i]` is the frame name of trajectory entry i; warnings are appended to *warnings.
+nlohmann::ordered_json CompleteFromMap(const FillStage& fill, FusionStage* fusion,
+                                       const Trajectory& trajectory,
+                                       const std::vector<std::string>& names, RunSink* sink,
+                                       const std::function<bool()>& stop,
+                                       std::vector<std::string>* warnings);
+
+}  // namespace gf
