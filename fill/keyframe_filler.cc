@@ -15,6 +15,13 @@ double Ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
+// The jobs pair selection made ready, as tasks for the next steps.
+std::vector<FillTask> Tasks(std::vector<StereoJob> jobs) {
+  std::vector<FillTask> tasks(jobs.size());
+  for (size_t i = 0; i < jobs.size(); ++i) tasks[i].job = std::move(jobs[i]);
+  return tasks;
+}
+
 }  // namespace
 
 bool KeyframeFillerOptions::Check(std::string* message) const {
@@ -58,16 +65,11 @@ std::vector<FillTask> KeyframeFiller::Pair(const RgbdFrame& frame,
     return failed;
   }
   last_pairing_ms_ = Ms(t0, Clock::now());
-  std::vector<FillTask> tasks(jobs.size());
-  for (size_t i = 0; i < jobs.size(); ++i) tasks[i].job = std::move(jobs[i]);
-  return tasks;
+  return Tasks(std::move(jobs));
 }
 
 std::vector<FillTask> KeyframeFiller::PairRest() {
-  std::vector<StereoJob> jobs = scheduler_.Flush();
-  std::vector<FillTask> tasks(jobs.size());
-  for (size_t i = 0; i < jobs.size(); ++i) tasks[i].job = std::move(jobs[i]);
-  return tasks;
+  return Tasks(scheduler_.Flush());
 }
 
 std::vector<FilledKeyframe> KeyframeFiller::Add(const RgbdFrame& frame,

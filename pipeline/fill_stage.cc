@@ -88,11 +88,7 @@ void FillStage::CloseQueues() {
 }
 
 void FillStage::RunPairing(KeyframeFiller* filler) {
-  struct Done {  // however it ends, the stereo thread gets no more
-    FillStage* stage;
-    bool ok = false;
-    ~Done() { ok ? stage->paired_.Close() : stage->CloseQueues(); }
-  } done{this};
+  EndOfBatches done{this, &paired_};  // however it ends, the stereo thread gets no more
   Offered item;
   int processed = 0;
   while (!cancelled_ && queue_.Pop(&item)) {
@@ -108,11 +104,7 @@ void FillStage::RunPairing(KeyframeFiller* filler) {
 }
 
 void FillStage::RunStereo(const KeyframeFiller* filler) {
-  struct Done {
-    FillStage* stage;
-    bool ok = false;
-    ~Done() { ok ? stage->stereo_done_.Close() : stage->CloseQueues(); }
-  } done{this};
+  EndOfBatches done{this, &stereo_done_};
   Batch batch;
   while (!cancelled_ && paired_.Pop(&batch)) {
     for (FillTask& task : batch.tasks) {

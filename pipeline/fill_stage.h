@@ -114,6 +114,13 @@ class FillStage {
   void RunWriting(KeyframeFiller* filler);
   // A thread that ends with an error stops the others (and Offer()).
   void CloseQueues();
+  // Ends a thread's output: closes `out` when the thread finished (ok), every queue otherwise.
+  struct EndOfBatches {
+    FillStage* stage;
+    BoundedQueue<Batch>* out;
+    bool ok = false;
+    ~EndOfBatches() { ok ? out->Close() : stage->CloseQueues(); }
+  };
   void Write(const FilledKeyframe& k);
 
   Camera camera_;
