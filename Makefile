@@ -90,7 +90,7 @@ demo: configure
 	$(BUILD_DIR)/apps/glassfusion demo --out $(DEMO_OUT)
 
 format:
-	find acquisition registration fill surfels pipeline apps datasets eval report tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
+	find acquisition registration fill surfels pipeline apps datasets eval report runs batch tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
 
 clean:
 	rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(TSAN_DIR) $(DEMO_OUT)

@@ -309,18 +309,27 @@ nlohmann::ordered_json IntrinsicsJson(const Camera& c) {
 
 }  // namespace
 
+namespace {
+constexpr std::pair<const char*, ReadoutOrder> kReadoutOrders[] = {
+    {"top_to_bottom", ReadoutOrder::kTopToBottom},
+    {"bottom_to_top", ReadoutOrder::kBottomToTop},
+    {"left_to_right", ReadoutOrder::kLeftToRight},
+    {"right_to_left", ReadoutOrder::kRightToLeft}};
+}  // namespace
+
 bool ParseReadoutOrder(const std::string& text, ReadoutOrder* order) {
-  const std::pair<const char*, ReadoutOrder> names[] = {
-      {"top_to_bottom", ReadoutOrder::kTopToBottom},
-      {"bottom_to_top", ReadoutOrder::kBottomToTop},
-      {"left_to_right", ReadoutOrder::kLeftToRight},
-      {"right_to_left", ReadoutOrder::kRightToLeft}};
-  for (const auto& [name, value] : names)
+  for (const auto& [name, value] : kReadoutOrders)
     if (text == name) {
       *order = value;
       return true;
     }
   return false;
+}
+
+const char* ReadoutOrderName(ReadoutOrder order) {
+  for (const auto& [name, value] : kReadoutOrders)
+    if (order == value) return name;
+  return "top_to_bottom";  // (every value is listed)
 }
 
 CameraFile LoadCameraFile(const std::string& path) {
@@ -374,12 +383,12 @@ CameraFile LoadCameraFile(const std::string& path) {
   if (j.contains("depth_readout_order")) {
     if (!j["depth_readout_order"].is_string())
       throw InputError(path, "\"depth_readout_order\" must be a string");
-    file.depth_readout_order = j["depth_readout_order"].get<std::string>();
     ReadoutOrder order;
-    if (!ParseReadoutOrder(*file.depth_readout_order, &order))
+    if (!ParseReadoutOrder(j["depth_readout_order"].get<std::string>(), &order))
       throw InputError(path,
                        "\"depth_readout_order\" must be top_to_bottom, bottom_to_top, "
                        "left_to_right or right_to_left");
+    file.depth_readout_order = order;
   }
   if (!file.depth_registered_to_color && !file.depth_camera)
     throw InputError(
@@ -392,7 +401,7 @@ void SaveCameraFile(const std::string& path, const CameraFile& file) {
   j["depth_scale"] = file.depth_scale;
   j["depth_registered_to_color"] = file.depth_registered_to_color;
   if (file.depth_readout_s) j["depth_readout_s"] = *file.depth_readout_s;
-  if (file.depth_readout_order) j["depth_readout_order"] = *file.depth_readout_order;
+  if (file.depth_readout_order) j["depth_readout_order"] = ReadoutOrderName(*file.depth_readout_order);
   if (file.depth_camera) {
     j["depth_camera"] = IntrinsicsJson(*file.depth_camera);
     const Eigen::Matrix3d r = file.color_from_depth.RotationMatrix();

@@ -169,6 +169,8 @@ class UndistortedPixels {
 enum class ReadoutOrder { kTopToBottom, kBottomToTop, kLeftToRight, kRightToLeft };
 // "top_to_bottom", "bottom_to_top", "left_to_right", "right_to_left"; false for anything else.
 bool ParseReadoutOrder(const std::string& text, ReadoutOrder* order);
+// The name ParseReadoutOrder reads ("top_to_bottom", ...).
+const char* ReadoutOrderName(ReadoutOrder order);
 
 // Everything camera.json holds.
 struct CameraFile {
@@ -185,7 +187,7 @@ struct CameraFile {
   // The order the depth image's lines were exposed in: "top_to_bottom", "bottom_to_top",
   // "left_to_right" or "right_to_left" (images turned in software after capture). Absent: the
   // tracker's setting (top to bottom).
-  std::optional<std::string> depth_readout_order;
+  std::optional<ReadoutOrder> depth_readout_order;
 };
 
 // Reads camera.json; throws InputError naming the file on a missing file, bad JSON, a missing or

@@ -81,7 +81,7 @@ TEST(Camera, TheDepthSensorsReadoutIsOptionalAndChecked) {
                       R"(, "depth_readout_s": 0.02, "depth_readout_order": "right_to_left"})");
   f = LoadCameraFile(path);
   EXPECT_DOUBLE_EQ(f.depth_readout_s.value_or(-1), 0.02);
-  EXPECT_EQ(f.depth_readout_order.value_or(""), "right_to_left");
+  EXPECT_EQ(f.depth_readout_order, ReadoutOrder::kRightToLeft);
   SaveCameraFile(path, f);
   EXPECT_DOUBLE_EQ(LoadCameraFile(path).depth_readout_s.value_or(-1), 0.02);
   WriteText(path, "{" + intrinsics + R"(, "depth_readout_s": -1})");

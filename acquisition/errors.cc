@@ -1,6 +1,7 @@
 #include "acquisition/errors.h"
 
 #include <algorithm>
+#include <csignal>
 #include <sstream>
 
 namespace gf {
@@ -15,6 +16,12 @@ std::string OneLine(std::string s) {
 
 InputError::InputError(const std::string& file, const std::string& problem)
     : std::runtime_error(OneLine(file + ": " + problem)), file_(file), problem_(problem) {}
+
+std::string SignalName(int signal) {
+  if (signal == SIGINT) return "SIGINT";
+  if (signal == SIGTERM) return "SIGTERM";
+  return "signal " + std::to_string(signal);
+}
 
 namespace internal {
 void FailCheck(const char* condition, const char* file, int line, const std::string& message) {

@@ -27,6 +27,21 @@ class InputError : public std::runtime_error {
   std::string problem_;
 };
 
+// A run stopped by a signal (Ctrl-C, SIGTERM) after writing what it had; the command line exits
+// with 128 + signal.
+class Interrupted : public std::runtime_error {
+ public:
+  Interrupted(int signal, const std::string& message)
+      : std::runtime_error(message), signal_(signal) {}
+  int signal() const { return signal_; }
+
+ private:
+  int signal_;
+};
+
+// "SIGINT", "SIGTERM" or "signal N".
+std::string SignalName(int signal);
+
 namespace internal {
 [[noreturn]] void FailCheck(const char* condition, const char* file, int line,
                             const std::string& message);

@@ -2,7 +2,7 @@
 #include <iostream>
 
 #include "acquisition/errors.h"
-#include "apps/batch.h"
+#include "batch/batch.h"
 #include "apps/commands.h"
 #include "apps/interrupt.h"
 

@@ -4,20 +4,21 @@
 #include <iostream>
 
 #include "acquisition/errors.h"
+#include "acquisition/input_info.h"
 #include "acquisition/json_text.h"
 #include "acquisition/trajectory_metrics.h"
-#include "apps/bench.h"
 #include "apps/capture.h"
-#include "fill/colmap_workspace.h"
-#include "apps/compare.h"
-#include "apps/demo.h"
-#include "apps/info.h"
+#include "apps/frame_range.h"
 #include "apps/interrupt.h"
 #include "apps/progress.h"
-#include "apps/reconstruct.h"
 #include "datasets/synth.h"
 #include "eval/map_truth.h"
+#include "fill/colmap_workspace.h"
 #include "pipeline/settings.h"
+#include "runs/bench.h"
+#include "runs/compare.h"
+#include "runs/demo.h"
+#include "runs/reconstruct.h"
 
 namespace gf {
 namespace {
@@ -465,7 +466,7 @@ void AddDemoCommand(CLI::App& app) {
   cmd->callback([options, frames, no_glass] {
     options->glass = !*no_glass;
     options->frames = FrameCountOf(*frames, "demo");
-    RunDemo(*options);
+    std::cout << "demo: " << RunDemo(*options) << std::endl;
   });
 }
 

@@ -47,10 +47,4 @@ InterruptHandler::~InterruptHandler() {
 
 const std::atomic<int>* InterruptHandler::signal() const { return &g_signal; }
 
-std::string SignalName(int signal) {
-  if (signal == SIGINT) return "SIGINT";
-  if (signal == SIGTERM) return "SIGTERM";
-  return "signal " + std::to_string(signal);
-}
-
 }  // namespace gf

@@ -6,8 +6,8 @@
 #pragma once
 
 #include <atomic>
-#include <stdexcept>
-#include <string>
+
+#include "acquisition/errors.h"  // Interrupted, SignalName
 
 namespace gf {
 
@@ -20,19 +20,5 @@ class InterruptHandler {
   // The signal received (SIGINT, SIGTERM), 0 while none; safe to read from any thread.
   const std::atomic<int>* signal() const;
 };
-
-// A command stopped by a signal after writing what it had; main exits with 128 + signal.
-class Interrupted : public std::runtime_error {
- public:
-  Interrupted(int signal, const std::string& message)
-      : std::runtime_error(message), signal_(signal) {}
-  int signal() const { return signal_; }
-
- private:
-  int signal_;
-};
-
-// "SIGINT", "SIGTERM" or "signal N".
-std::string SignalName(int signal);
 
 }  // namespace gf

@@ -14,6 +14,7 @@
 #include "acquisition/errors.h"
 #include "apps/commands.h"
 #include "apps/interrupt.h"
+#include "apps/progress.h"
 #include "report/run_report.h"
 
 int main(int argc, char** argv) {
@@ -23,6 +24,7 @@ int main(int argc, char** argv) {
   // from 160 to 112 ms on our 2-core VM. The process keeps its peak heap.
   mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest allowed threshold (64-bit)
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
+  gf::ShowProgressOnTerminal();  // the libraries' long work, drawn on stderr
   gf::SetCommandLine(argc, argv);  // for the reports' "command" line
   // stdout carries results (JSON for info); logs go to stderr.
   spdlog::set_default_logger(spdlog::stderr_color_mt("glassfusion"));

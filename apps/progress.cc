@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <memory>
 
 namespace gf {
 
@@ -48,6 +49,12 @@ void TerminalProgress::Finish() {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   std::fprintf(stderr, "\r\033[K%s: %d frames in %.1f s (%.1f fps, the whole run)\n",
                label_.c_str(), done_, seconds, seconds > 0 ? done_ / seconds : 0.0);
+}
+
+void ShowProgressOnTerminal() {
+  SetProgressDisplay([](const std::string& label, std::optional<int> total) {
+    return std::make_unique<TerminalProgress>(label, total);
+  });
 }
 
 }  // namespace gf

@@ -1,5 +1,6 @@
-// Terminal progress for long work: frames done, rate and time left, redrawn in place on stderr (the
-// line cleared each time), and a last line with the whole run's rate. Quiet when stderr is not a
+// Terminal progress for long work, the command line's display of the libraries' progress
+// (acquisition/progress.h): frames done, rate and time left, redrawn in place on stderr (the line
+// cleared each time), and a last line with the whole run's rate. Quiet when stderr is not a
 // terminal (logs and scripts read the command's own output instead).
 #pragma once
 
@@ -7,18 +8,18 @@
 #include <optional>
 #include <string>
 
+#include "acquisition/progress.h"
+
 namespace gf {
 
-class TerminalProgress {
+class TerminalProgress : public Progress {
  public:
   // label: what is being counted ("info", "reconstruct"); total: frames expected, if known.
   TerminalProgress(std::string label, std::optional<int> total);
-  ~TerminalProgress();
-  // `detail` follows the counts (e.g. what is still finishing after the last frame).
-  void Update(int done, const std::string& detail = "");
-  void Finish();
-  // The frames expected, once known better (a frame range of the input).
-  void SetTotal(std::optional<int> total) { total_ = total; }
+  ~TerminalProgress() override;
+  void Update(int done, const std::string& detail = "") override;
+  void Finish() override;
+  void SetTotal(std::optional<int> total) override { total_ = total; }
 
  private:
   std::string label_;
@@ -30,5 +31,8 @@ class TerminalProgress {
   bool interactive_;
   bool finished_ = false;
 };
+
+// Makes every library's progress (ShowProgress) a TerminalProgress; called once by main.
+void ShowProgressOnTerminal();
 
 }  // namespace gf

@@ -7,9 +7,10 @@
 #   repository root, so headers are included as "acquisition/camera.h". A module with no sources yet
 #   becomes an INTERFACE library that only carries its dependencies.
 #
-# gf_add_test(MODULE NAME SOURCES a_test.cc ... [LIBS ...] [TIMEOUT seconds])
+# gf_add_test(MODULE NAME SOURCES a_test.cc ... [LIBS ...] [TIMEOUT seconds] [LABEL label])
 #   Builds a GoogleTest executable and registers its tests as MODULE/NAME so that
-#   `ctest -R MODULE/` runs one module. Each test times out after TIMEOUT seconds (900).
+#   `ctest -R MODULE/` runs one module. Each test times out after TIMEOUT seconds (900). Its ctest
+#   label is MODULE, or LABEL (`tests`: an end-to-end run, which `make sanitize` leaves out).
 
 function(gf_add_library NAME)
   cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
@@ -45,7 +46,11 @@ function(gf_add_test MODULE NAME)
   if(NOT GF_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS" ${ARGN})
+  cmake_parse_arguments(ARG "" "TIMEOUT;LABEL" "SOURCES;LIBS" ${ARGN})
+  set(label ${MODULE})
+  if(ARG_LABEL)
+    set(label ${ARG_LABEL})
+  endif()
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 900)
   endif()
@@ -63,5 +68,5 @@ function(gf_add_test MODULE NAME)
   gtest_discover_tests(${target}
     TEST_PREFIX "${MODULE}/${NAME}."
     DISCOVERY_TIMEOUT 60
-    PROPERTIES LABELS ${MODULE} TIMEOUT ${ARG_TIMEOUT})
+    PROPERTIES LABELS ${label} TIMEOUT ${ARG_TIMEOUT})
 endfunction()

@@ -239,6 +239,80 @@ float ValueNoise(const Eigen::Vector3d& point, uint32_t seed) {
 
 std::vector<std::string> Scene::Names() { return {"glass-table", "shelf", "window", "bottles"}; }
 
+namespace {
+
+// The glass table: a wooden table with cups, bottles (one clear), a metal ball and can, a black
+// box; a crate on the floor.
+internal::SceneView AddGlassTable(uint32_t seed, const Surface& wood, std::vector<Primitive>* prims) {
+  std::vector<Primitive>& p = *prims;
+  p.push_back(Box("table top", {-0.6, -0.4, 0.72}, {0.6, 0.4, 0.76}, wood));
+  for (double x : {-0.56, 0.52})
+    for (double y : {-0.36, 0.32})
+      p.push_back(Box("table leg", {x, y, 0.0}, {x + 0.04, y + 0.04, 0.72}, wood));
+  p.push_back(Cylinder(
+      "frosted cup", {-0.30, 0.10, 0.76}, 0.04, 0.11,
+      MakeSurface(Material::kTexturedGlass, {0.85f, 0.80f, 0.72f}, 0.4f, 0.004f, seed + 10)));
+  p.push_back(Cylinder(
+      "printed cup", {0.25, -0.15, 0.76}, 0.045, 0.10,
+      MakeSurface(Material::kTexturedGlass, {0.55f, 0.75f, 0.85f}, 0.55f, 0.003f, seed + 11)));
+  p.push_back(Cylinder(
+      "clear bottle", {0.0, 0.15, 0.76}, 0.04, 0.25,
+      MakeSurface(Material::kClearGlass, {0.80f, 0.90f, 0.85f}, 0.0f, 0.01f, seed + 12)));
+  p.push_back(
+      Cylinder("bottle label", {0.0, 0.15, 0.84}, 0.0405, 0.08,
+               MakeSurface(Material::kDiffuse, {0.30f, 0.55f, 0.90f}, 0.6f, 0.003f, seed + 13)));
+  p.push_back(Cylinder(
+      "tinted bottle", {0.35, 0.20, 0.76}, 0.035, 0.22,
+      MakeSurface(Material::kTexturedGlass, {0.35f, 0.65f, 0.30f}, 0.45f, 0.004f, seed + 14)));
+  p.push_back(
+      Sphere("metal ball", {-0.12, -0.18, 0.83}, 0.07,
+             MakeSurface(Material::kGlossy, {0.70f, 0.70f, 0.72f}, 0.45f, 0.004f, seed + 15)));
+  p.push_back(
+      Cylinder("metal can", {0.45, -0.25, 0.76}, 0.035, 0.12,
+               MakeSurface(Material::kGlossy, {0.55f, 0.60f, 0.75f}, 0.5f, 0.003f, seed + 16)));
+  p.push_back(Box("black box", {-0.50, -0.30, 0.76}, {-0.38, -0.10, 0.86},
+                  MakeSurface(Material::kDark, {0.07f, 0.07f, 0.08f}, 0.6f, 0.004f, seed + 17)));
+  p.push_back(
+      Box("crate", {0.9, 0.6, 0.0}, {1.3, 1.0, 0.45},
+          MakeSurface(Material::kDiffuse, {0.35f, 0.55f, 0.45f}, 0.5f, 0.008f, seed + 18)));
+  return {{0.0, 0.0, 0.82}, 1.5, 1.45, -1.5707963267948966};
+}
+
+// A shelf of three boards, each with a jar, a clear vase, a can, a black box and a book.
+internal::SceneView AddShelf(uint32_t seed, const Surface& wood, std::vector<Primitive>* prims) {
+  std::vector<Primitive>& p = *prims;
+  p.push_back(Box("shelf back", {-0.8, 1.15, 0.0}, {0.8, 1.25, 1.8}, wood));
+  for (double x : {-0.82, 0.8})
+    p.push_back(Box("shelf side", {x, 0.85, 0.0}, {x + 0.02, 1.25, 1.8}, wood));
+  for (double z : {0.0, 0.45, 0.9, 1.35})
+    p.push_back(Box("shelf board", {-0.8, 0.85, z}, {0.8, 1.15, z + 0.02}, wood));
+  uint32_t k = 20;
+  // Items at different depths on each board: front (y ~ 0.92) and back (y ~ 1.08).
+  for (double z : {0.02, 0.47, 0.92}) {
+    p.push_back(Cylinder(
+        "glass jar", {-0.55, 0.95, z}, 0.05, 0.16,
+        MakeSurface(Material::kTexturedGlass, {0.80f, 0.78f, 0.70f}, 0.45f, 0.004f, seed + k++)));
+    p.push_back(Cylinder(
+        "clear vase", {-0.2, 1.05, z}, 0.045, 0.22,
+        MakeSurface(Material::kClearGlass, {0.85f, 0.90f, 0.90f}, 0.0f, 0.01f, seed + k++)));
+    p.push_back(Cylinder(
+        "metal can", {0.1, 0.93, z}, 0.035, 0.12,
+        MakeSurface(Material::kGlossy, {0.65f, 0.62f, 0.60f}, 0.5f, 0.003f, seed + k++)));
+    p.push_back(
+        Box("black box", {0.3, 1.0, z}, {0.45, 1.12, z + 0.14},
+            MakeSurface(Material::kDark, {0.06f, 0.06f, 0.07f}, 0.6f, 0.004f, seed + k++)));
+    p.push_back(
+        Box("book", {0.55, 0.95, z}, {0.62, 1.12, z + 0.2},
+            MakeSurface(Material::kDiffuse, {0.25f, 0.30f, 0.70f}, 0.5f, 0.004f, seed + k++)));
+  }
+  p.push_back(
+      Sphere("metal ball", {0.0, 0.95, 1.43}, 0.06,
+             MakeSurface(Material::kGlossy, {0.72f, 0.72f, 0.74f}, 0.45f, 0.004f, seed + k++)));
+  return {{0.0, 1.0, 0.8}, 1.7, 1.2, -1.5707963267948966};
+}
+
+}  // namespace
+
 Scene Scene::Make(const std::string& name, uint32_t seed) {
   Scene s;
   s.name_ = name;
@@ -246,83 +320,21 @@ Scene Scene::Make(const std::string& name, uint32_t seed) {
   AddRoom(&p, seed);
   const Surface wood =
       MakeSurface(Material::kDiffuse, {0.20f, 0.38f, 0.58f}, 0.5f, 0.006f, seed + 3);
+  internal::SceneView view;
   if (name == "glass-table") {
-    p.push_back(Box("table top", {-0.6, -0.4, 0.72}, {0.6, 0.4, 0.76}, wood));
-    for (double x : {-0.56, 0.52})
-      for (double y : {-0.36, 0.32})
-        p.push_back(Box("table leg", {x, y, 0.0}, {x + 0.04, y + 0.04, 0.72}, wood));
-    p.push_back(Cylinder(
-        "frosted cup", {-0.30, 0.10, 0.76}, 0.04, 0.11,
-        MakeSurface(Material::kTexturedGlass, {0.85f, 0.80f, 0.72f}, 0.4f, 0.004f, seed + 10)));
-    p.push_back(Cylinder(
-        "printed cup", {0.25, -0.15, 0.76}, 0.045, 0.10,
-        MakeSurface(Material::kTexturedGlass, {0.55f, 0.75f, 0.85f}, 0.55f, 0.003f, seed + 11)));
-    p.push_back(Cylinder(
-        "clear bottle", {0.0, 0.15, 0.76}, 0.04, 0.25,
-        MakeSurface(Material::kClearGlass, {0.80f, 0.90f, 0.85f}, 0.0f, 0.01f, seed + 12)));
-    p.push_back(
-        Cylinder("bottle label", {0.0, 0.15, 0.84}, 0.0405, 0.08,
-                 MakeSurface(Material::kDiffuse, {0.30f, 0.55f, 0.90f}, 0.6f, 0.003f, seed + 13)));
-    p.push_back(Cylinder(
-        "tinted bottle", {0.35, 0.20, 0.76}, 0.035, 0.22,
-        MakeSurface(Material::kTexturedGlass, {0.35f, 0.65f, 0.30f}, 0.45f, 0.004f, seed + 14)));
-    p.push_back(
-        Sphere("metal ball", {-0.12, -0.18, 0.83}, 0.07,
-               MakeSurface(Material::kGlossy, {0.70f, 0.70f, 0.72f}, 0.45f, 0.004f, seed + 15)));
-    p.push_back(
-        Cylinder("metal can", {0.45, -0.25, 0.76}, 0.035, 0.12,
-                 MakeSurface(Material::kGlossy, {0.55f, 0.60f, 0.75f}, 0.5f, 0.003f, seed + 16)));
-    p.push_back(Box("black box", {-0.50, -0.30, 0.76}, {-0.38, -0.10, 0.86},
-                    MakeSurface(Material::kDark, {0.07f, 0.07f, 0.08f}, 0.6f, 0.004f, seed + 17)));
-    p.push_back(
-        Box("crate", {0.9, 0.6, 0.0}, {1.3, 1.0, 0.45},
-            MakeSurface(Material::kDiffuse, {0.35f, 0.55f, 0.45f}, 0.5f, 0.008f, seed + 18)));
-    s.focus_ = {0.0, 0.0, 0.82};
-    s.orbit_radius_ = 1.5;
-    s.eye_height_ = 1.45;
-    s.orbit_center_angle_ = -1.5707963267948966;
+    view = AddGlassTable(seed, wood, &p);
   } else if (name == "shelf") {
-    p.push_back(Box("shelf back", {-0.8, 1.15, 0.0}, {0.8, 1.25, 1.8}, wood));
-    for (double x : {-0.82, 0.8})
-      p.push_back(Box("shelf side", {x, 0.85, 0.0}, {x + 0.02, 1.25, 1.8}, wood));
-    for (double z : {0.0, 0.45, 0.9, 1.35})
-      p.push_back(Box("shelf board", {-0.8, 0.85, z}, {0.8, 1.15, z + 0.02}, wood));
-    uint32_t k = 20;
-    // Items at different depths on each board: front (y ~ 0.92) and back (y ~ 1.08).
-    for (double z : {0.02, 0.47, 0.92}) {
-      p.push_back(Cylinder(
-          "glass jar", {-0.55, 0.95, z}, 0.05, 0.16,
-          MakeSurface(Material::kTexturedGlass, {0.80f, 0.78f, 0.70f}, 0.45f, 0.004f, seed + k++)));
-      p.push_back(Cylinder(
-          "clear vase", {-0.2, 1.05, z}, 0.045, 0.22,
-          MakeSurface(Material::kClearGlass, {0.85f, 0.90f, 0.90f}, 0.0f, 0.01f, seed + k++)));
-      p.push_back(Cylinder(
-          "metal can", {0.1, 0.93, z}, 0.035, 0.12,
-          MakeSurface(Material::kGlossy, {0.65f, 0.62f, 0.60f}, 0.5f, 0.003f, seed + k++)));
-      p.push_back(
-          Box("black box", {0.3, 1.0, z}, {0.45, 1.12, z + 0.14},
-              MakeSurface(Material::kDark, {0.06f, 0.06f, 0.07f}, 0.6f, 0.004f, seed + k++)));
-      p.push_back(
-          Box("book", {0.55, 0.95, z}, {0.62, 1.12, z + 0.2},
-              MakeSurface(Material::kDiffuse, {0.25f, 0.30f, 0.70f}, 0.5f, 0.004f, seed + k++)));
-    }
-    p.push_back(
-        Sphere("metal ball", {0.0, 0.95, 1.43}, 0.06,
-               MakeSurface(Material::kGlossy, {0.72f, 0.72f, 0.74f}, 0.45f, 0.004f, seed + k++)));
-    s.focus_ = {0.0, 1.0, 0.8};
-    s.orbit_radius_ = 1.7;
-    s.eye_height_ = 1.2;
-    s.orbit_center_angle_ = -1.5707963267948966;
+    view = AddShelf(seed, wood, &p);
   } else if (name == "window" || name == "bottles") {
-    const internal::SceneView view = internal::AddGlassScene(name, seed, wood, &p);
-    s.focus_ = view.focus;
-    s.orbit_radius_ = view.orbit_radius;
-    s.eye_height_ = view.eye_height;
-    s.orbit_center_angle_ = view.orbit_center_angle;
+    view = internal::AddGlassScene(name, seed, wood, &p);
   } else {
     throw std::invalid_argument("unknown scene \"" + name +
                                 "\" (known: glass-table, shelf, window, bottles)");
   }
+  s.focus_ = view.focus;
+  s.orbit_radius_ = view.orbit_radius;
+  s.eye_height_ = view.eye_height;
+  s.orbit_center_angle_ = view.orbit_center_angle;
   s.light_ = s.focus_ + Eigen::Vector3d(0.4, -0.6, 1.9);
   return s;
 }
@@ -375,12 +387,16 @@ Eigen::Vector3f Scene::Shade(const Hit& hit, const Eigen::Vector3d& view_directi
   return color.cwiseMax(0.f).cwiseMin(1.f);
 }
 
-void Scene::WritePly(const std::string& path) const {
+namespace {
+
+// The triangles of the scene's primitives, each vertex labelled with its material.
+struct LabelledMesh {
   std::vector<Eigen::Vector3f> vertices;
   std::vector<uint8_t> labels;
   std::vector<std::array<int, 3>> faces;
-  auto quad = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                  const Eigen::Vector3d& d, uint8_t label) {
+
+  void Quad(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+            const Eigen::Vector3d& d, uint8_t label) {
     const int base = static_cast<int>(vertices.size());
     for (const auto& v : {a, b, c, d}) {
       vertices.push_back(v.cast<float>());
@@ -388,62 +404,73 @@ void Scene::WritePly(const std::string& path) const {
     }
     faces.push_back({base, base + 1, base + 2});
     faces.push_back({base, base + 2, base + 3});
-  };
-  auto tri = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                 uint8_t label) {
+  }
+  void Tri(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+           uint8_t label) {
     const int base = static_cast<int>(vertices.size());
     for (const auto& v : {a, b, c}) {
       vertices.push_back(v.cast<float>());
       labels.push_back(label);
     }
     faces.push_back({base, base + 1, base + 2});
-  };
-  for (const Primitive& p : primitives_) {
-    const uint8_t label = static_cast<uint8_t>(p.surface.material);
-    switch (p.kind) {
-      case Primitive::Kind::kBox:
-      case Primitive::Kind::kRoom: {
-        const Eigen::Vector3d& lo = p.min_corner;
-        const Eigen::Vector3d& hi = p.max_corner;
-        auto corner = [&](int i) {
-          return Eigen::Vector3d(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(),
-                                 i & 4 ? hi.z() : lo.z());
-        };
-        const int f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                             {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-        for (const auto& q : f) quad(corner(q[0]), corner(q[1]), corner(q[2]), corner(q[3]), label);
-        break;
+  }
+};
+
+void AddPrimitive(const Primitive& p, LabelledMesh* mesh) {
+  const uint8_t label = static_cast<uint8_t>(p.surface.material);
+  switch (p.kind) {
+    case Primitive::Kind::kBox:
+    case Primitive::Kind::kRoom: {
+      const Eigen::Vector3d& lo = p.min_corner;
+      const Eigen::Vector3d& hi = p.max_corner;
+      auto corner = [&](int i) {
+        return Eigen::Vector3d(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(),
+                               i & 4 ? hi.z() : lo.z());
+      };
+      const int f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+      for (const auto& q : f) mesh->Quad(corner(q[0]), corner(q[1]), corner(q[2]), corner(q[3]), label);
+      break;
+    }
+    case Primitive::Kind::kCylinder: {
+      const int n = 48;
+      for (int i = 0; i < n; ++i) {
+        const double a0 = 2 * M_PI * i / n, a1 = 2 * M_PI * (i + 1) / n;
+        const Eigen::Vector3d r0(p.radius * std::cos(a0), p.radius * std::sin(a0), 0);
+        const Eigen::Vector3d r1(p.radius * std::cos(a1), p.radius * std::sin(a1), 0);
+        const Eigen::Vector3d up(0, 0, p.height);
+        mesh->Quad(p.center + r0, p.center + r1, p.center + r1 + up, p.center + r0 + up, label);
+        mesh->Tri(p.center + up, p.center + r0 + up, p.center + r1 + up, label);
+        mesh->Tri(p.center, p.center + r1, p.center + r0, label);
       }
-      case Primitive::Kind::kCylinder: {
-        const int n = 48;
-        for (int i = 0; i < n; ++i) {
-          const double a0 = 2 * M_PI * i / n, a1 = 2 * M_PI * (i + 1) / n;
-          const Eigen::Vector3d r0(p.radius * std::cos(a0), p.radius * std::sin(a0), 0);
-          const Eigen::Vector3d r1(p.radius * std::cos(a1), p.radius * std::sin(a1), 0);
-          const Eigen::Vector3d up(0, 0, p.height);
-          quad(p.center + r0, p.center + r1, p.center + r1 + up, p.center + r0 + up, label);
-          tri(p.center + up, p.center + r0 + up, p.center + r1 + up, label);
-          tri(p.center, p.center + r1, p.center + r0, label);
+      break;
+    }
+    case Primitive::Kind::kSphere: {
+      const int n = 24;
+      for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < 2 * n; ++j) {
+          auto at = [&](int a, int b) -> Eigen::Vector3d {
+            const double th = M_PI * a / n, ph = M_PI * b / n;
+            return p.center + p.radius * Eigen::Vector3d(std::sin(th) * std::cos(ph),
+                                                         std::sin(th) * std::sin(ph),
+                                                         std::cos(th));
+          };
+          mesh->Quad(at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1), label);
         }
-        break;
       }
-      case Primitive::Kind::kSphere: {
-        const int n = 24;
-        for (int i = 0; i < n; ++i) {
-          for (int j = 0; j < 2 * n; ++j) {
-            auto at = [&](int a, int b) -> Eigen::Vector3d {
-              const double th = M_PI * a / n, ph = M_PI * b / n;
-              return p.center + p.radius * Eigen::Vector3d(std::sin(th) * std::cos(ph),
-                                                           std::sin(th) * std::sin(ph),
-                                                           std::cos(th));
-            };
-            quad(at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1), label);
-          }
-        }
-        break;
-      }
+      break;
     }
   }
+}
+
+}  // namespace
+
+void Scene::WritePly(const std::string& path) const {
+  LabelledMesh mesh;
+  for (const Primitive& p : primitives_) AddPrimitive(p, &mesh);
+  const std::vector<Eigen::Vector3f>& vertices = mesh.vertices;
+  const std::vector<uint8_t>& labels = mesh.labels;
+  const std::vector<std::array<int, 3>>& faces = mesh.faces;
   WriteFileAtomically(path, [&](const std::string& temporary) {
     std::ofstream out(temporary, std::ios::binary);
     if (!out) throw InputError(path, "cannot open for writing");

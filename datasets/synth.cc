@@ -167,6 +167,44 @@ std::string SynthSummary::BriefReport() const {
   return text;
 }
 
+namespace {
+
+// synth.json: how the capture was made (the options, the sensor model) and what the sensor saw.
+nlohmann::ordered_json SynthJson(const SynthOptions& options, const SynthSummary& summary) {
+  nlohmann::ordered_json j;
+  j["scene"] = options.scene;
+  j["seed"] = options.seed;
+  j["frames"] = options.frames;
+  j["loop"] = options.loop;
+  j["fps"] = options.fps;
+  j["kinect"] = {{"projector_baseline_m", options.kinect.projector_baseline_m},
+                 {"min_depth_m", options.kinect.min_depth_m},
+                 {"max_depth_m", options.kinect.max_depth_m},
+                 {"noise_sigma_m", "a + b (z - 0.4)^2"},
+                 {"noise_a_m", options.kinect.noise_a_m},
+                 {"noise_b_per_m", options.kinect.noise_b_per_m},
+                 {"ir_return_probability", options.kinect.ir_return_probability},
+                 {"glass_surface_probability", options.kinect.glass_surface_probability},
+                 {"glass_surface_exponent", options.kinect.glass_surface_exponent},
+                 {"glass_hole_probability", options.kinect.glass_hole_probability},
+                 {"glass_hole_exponent", options.kinect.glass_hole_exponent},
+                 {"glass_through_offset_m", options.kinect.glass_through_offset_m},
+                 {"glass_through_sigma_m", options.kinect.glass_through_sigma_m},
+                 {"glass_patch_px", options.kinect.glass_patch_px}};
+  j["materials"] = {"diffuse", "glossy", "dark", "textured_glass", "clear_glass"};
+  j["sensor_hole_fraction"] = summary.hole_fraction;
+  // What the sensor saw on clear glass, beside the truth (gt/depth is the glass's own surface).
+  const ClearGlassStats& glass = summary.clear_glass;
+  j["clear_glass_sensor"] = {{"pixels", glass.pixels},
+                             {"hole", glass.Share(glass.holes)},
+                             {"reads_behind", glass.Share(glass.through)},
+                             {"reads_surface", glass.Share(glass.surface)}};
+  j["seconds_per_frame"] = summary.seconds_per_frame;
+  return j;
+}
+
+}  // namespace
+
 SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out_dir,
                              const std::function<void(int, int)>& progress) {
   std::string problem;
@@ -239,36 +277,8 @@ SynthSummary GenerateDataset(const SynthOptions& options, const std::string& out
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
       options.frames;
   summary.hole_fraction = pixels ? static_cast<double>(hole_pixels) / pixels : 0.0;
-  nlohmann::ordered_json j;
-  j["scene"] = options.scene;
-  j["seed"] = options.seed;
-  j["frames"] = options.frames;
-  j["loop"] = options.loop;
-  j["fps"] = options.fps;
-  j["kinect"] = {{"projector_baseline_m", options.kinect.projector_baseline_m},
-                 {"min_depth_m", options.kinect.min_depth_m},
-                 {"max_depth_m", options.kinect.max_depth_m},
-                 {"noise_sigma_m", "a + b (z - 0.4)^2"},
-                 {"noise_a_m", options.kinect.noise_a_m},
-                 {"noise_b_per_m", options.kinect.noise_b_per_m},
-                 {"ir_return_probability", options.kinect.ir_return_probability},
-                 {"glass_surface_probability", options.kinect.glass_surface_probability},
-                 {"glass_surface_exponent", options.kinect.glass_surface_exponent},
-                 {"glass_hole_probability", options.kinect.glass_hole_probability},
-                 {"glass_hole_exponent", options.kinect.glass_hole_exponent},
-                 {"glass_through_offset_m", options.kinect.glass_through_offset_m},
-                 {"glass_through_sigma_m", options.kinect.glass_through_sigma_m},
-                 {"glass_patch_px", options.kinect.glass_patch_px}};
-  j["materials"] = {"diffuse", "glossy", "dark", "textured_glass", "clear_glass"};
-  j["sensor_hole_fraction"] = summary.hole_fraction;
-  // What the sensor saw on clear glass, beside the truth (gt/depth is the glass's own surface).
-  const ClearGlassStats& glass = summary.clear_glass;
-  j["clear_glass_sensor"] = {{"pixels", glass.pixels},
-                             {"hole", glass.Share(glass.holes)},
-                             {"reads_behind", glass.Share(glass.through)},
-                             {"reads_surface", glass.Share(glass.surface)}};
-  j["seconds_per_frame"] = summary.seconds_per_frame;
-  WriteTextFileAtomically((stage / "synth.json").string(), JsonText(j) + "\n");
+  WriteTextFileAtomically((stage / "synth.json").string(),
+                          JsonText(SynthJson(options, summary)) + "\n");
 
   PublishFolder(stage.string(), out_dir);
   cleanup.armed = false;

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
+#include "acquisition/run_layout.h"
 #include "acquisition/camera.h"
 #include "acquisition/errors.h"
 #include "acquisition/frame_source.h"
@@ -24,11 +25,10 @@ cv::Mat Metres(const cv::Mat& depth16, double scale) {
   return out;
 }
 
-void ScoreKeyframe(const std::string& scene_dir, const fs::path& keyframes, const std::string& ts,
+void ScoreKeyframe(const std::string& scene_dir, const RunLayout& run, const std::string& ts,
                    double truth_scale, FillScore* score) {
-  const cv::Mat filled = ReadDepthImage((keyframes / (ts + ".depth_filled.png")).string());
-  const cv::Mat holes =
-      cv::imread((keyframes / (ts + ".hole_mask.png")).string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat filled = ReadDepthImage(run.Path(ts, KeyframeImage::kDepthFilled));
+  const cv::Mat holes = cv::imread(run.Path(ts, KeyframeImage::kHoleMask), cv::IMREAD_UNCHANGED);
   const cv::Mat label =
       cv::imread((fs::path(scene_dir) / "gt/label" / (ts + ".png")).string(), cv::IMREAD_UNCHANGED);
   const cv::Mat truth =
@@ -36,12 +36,12 @@ void ScoreKeyframe(const std::string& scene_dir, const fs::path& keyframes, cons
   const cv::Mat first_surface =
       ReadDepthImage((fs::path(scene_dir) / "gt/depth" / (ts + ".png")).string());
   // Absent with --no-glass, or when the map holds no glass in the keyframe's view.
-  const fs::path glass_file = keyframes / (ts + ".glass_mask.png");
+  const std::string glass_file = run.Path(ts, KeyframeImage::kGlassMask);
   const cv::Mat glass = fs::exists(glass_file)
-                            ? cv::imread(glass_file.string(), cv::IMREAD_UNCHANGED)
+                            ? cv::imread(glass_file, cv::IMREAD_UNCHANGED)
                             : cv::Mat::zeros(label.size(), CV_8U);
   if (holes.empty() || label.empty() || glass.size() != label.size())
-    throw InputError(keyframes.string(),
+    throw InputError(run.Path(RunLayout::kKeyframes),
                      "keyframe " + ts + ": a mask or the label missing, or of another size");
   ScoreKeyframeFill(Metres(filled, 1000.0), holes, label, Metres(truth, truth_scale),
                     Metres(first_surface, truth_scale), glass, score);
@@ -104,14 +104,11 @@ FillScore ScoreFill(const std::string& scene_dir, const std::string& run_dir) {
   const double truth_scale =
       LoadCameraFile((fs::path(scene_dir) / "camera.json").string()).depth_scale;
   FillScore score;
-  const fs::path keyframes = fs::path(run_dir) / "keyframes";
-  const std::string suffix = ".depth_filled.png";
-  for (const auto& entry : fs::directory_iterator(keyframes)) {
-    const std::string name = entry.path().filename().string();
-    if (name.size() > suffix.size() &&
-        !name.compare(name.size() - suffix.size(), suffix.size(), suffix))
-      ScoreKeyframe(scene_dir, keyframes, name.substr(0, name.size() - suffix.size()), truth_scale,
-                    &score);
+  const RunLayout run(run_dir);
+  for (const auto& entry : fs::directory_iterator(run.Path(RunLayout::kKeyframes))) {
+    const std::string name =
+        RunLayout::KeyframeOf(entry.path().filename().string(), KeyframeImage::kDepthFilled);
+    if (!name.empty()) ScoreKeyframe(scene_dir, run, name, truth_scale, &score);
   }
   return score;
 }

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <vector>
 
+#include "acquisition/run_layout.h"
 #include "acquisition/camera.h"
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
@@ -110,8 +111,9 @@ json ScoreMapFile(const std::string& map_path, const Trajectory& est, const Trut
 json EvaluateMapAgainstTruth(const std::string& input, const std::string& run_dir) {
   std::optional<Truth> truth = LoadTruth(input);
   if (!truth) return json();
-  return ScoreMapFile((fs::path(run_dir) / "map.ply").string(),
-                      ReadTumTrajectory((fs::path(run_dir) / "trajectory.txt").string()), *truth);
+  const RunLayout run(run_dir);
+  return ScoreMapFile(run.Path(RunLayout::kMap),
+                      ReadTumTrajectory(run.Path(RunLayout::kTrajectory)), *truth);
 }
 
 json EvaluateMapFiles(const std::string& map_path, const std::string& mesh_path,

@@ -332,6 +332,39 @@ void Reconstruction::CompleteKeyframes(const Stages& s, RunSink* sink,
                    summary);
 }
 
+namespace {
+
+// The frames a run over `source` will read (none: a live input, of no known length).
+std::optional<int> FramesToRun(FrameSource& source, int first_frame, int end_frame) {
+  std::optional<int> total = source.FrameCount();
+  if (!total) return total;
+  const int last = end_frame >= 0 ? std::min(*total, end_frame) : *total;
+  return std::max(0, last - first_frame);
+}
+
+// The camera of the run's images, written first (frames arrive registered to colour; keyframe
+// depth PNGs are millimetres): the sink needs it for the keyframes it writes, a partial run has
+// it too.
+void WriteRunCamera(FrameSource& source, RunSink* sink, RunSink* without_fill) {
+  CameraFile run_camera;
+  run_camera.camera = source.camera();
+  run_camera.depth_scale = 1000.0;
+  sink->WriteCamera(run_camera);
+  if (without_fill) without_fill->WriteCamera(run_camera);
+}
+
+}  // namespace
+
+nlohmann::ordered_json Reconstruction::CpuReportOf(const Stages& s, double process_cpu_s,
+                                                   double seconds) {
+  return CpuReport({{"read", s.reader->cpu_seconds()},
+                    {"track", s.tracker->cpu_seconds()},
+                    {"fill", s.fill ? s.fill->cpu_seconds() : 0.0},
+                    {"fusion", s.fusion ? s.fusion->cpu_seconds() : 0.0},
+                    {"loop_closure", s.loop ? s.loop->cpu_seconds() : 0.0}},
+                   process_cpu_s, seconds);
+}
+
 ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
                                           const ReconstructionCallbacks& callbacks,
                                           RunSink* without_fill) {
@@ -340,20 +373,9 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   const auto start = Clock::now();
   const double cpu_start = ProcessCpuSeconds();
   ReconstructionProgress progress;
-  progress.total = source.FrameCount();
-  if (progress.total) {
-    const int last =
-        options_.end_frame >= 0 ? std::min(*progress.total, options_.end_frame) : *progress.total;
-    progress.total = std::max(0, last - options_.first_frame);
-  }
+  progress.total = FramesToRun(source, options_.first_frame, options_.end_frame);
   const bool live = !progress.total.has_value();  // live input: tracking never waits
-  // The camera of the run's images first (frames arrive registered to colour; keyframe depth PNGs
-  // are millimetres): the sink needs it for the keyframes it writes, a partial run has it too.
-  CameraFile run_camera;
-  run_camera.camera = source.camera();
-  run_camera.depth_scale = 1000.0;
-  sink->WriteCamera(run_camera);
-  if (without_fill) without_fill->WriteCamera(run_camera);
+  WriteRunCamera(source, sink, without_fill);
   std::unique_ptr<Stages> s = MakeStages(source, sink, without_fill, live);
   std::string stop_reason, phase = "tracking", stop_phase, error_phase;
   // Progress and stop requests, from this thread; true once a stop was asked for.
@@ -395,12 +417,7 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   ReconstructionSummary summary = Summarise(source, *s, error, stop_reason, seconds);
   summary.report["stages"]["cpu_seconds"] =
-      CpuReport({{"read", s->reader->cpu_seconds()},
-                 {"track", s->tracker->cpu_seconds()},
-                 {"fill", s->fill ? s->fill->cpu_seconds() : 0.0},
-                 {"fusion", s->fusion ? s->fusion->cpu_seconds() : 0.0},
-                 {"loop_closure", s->loop ? s->loop->cpu_seconds() : 0.0}},
-                ProcessCpuSeconds() - cpu_start, seconds);
+      CpuReportOf(*s, ProcessCpuSeconds() - cpu_start, seconds);
   summary.report["stages"]["peak_resident_mib"] = PeakResidentMiB();
   if (!summary.complete && summary.stopped_during.empty())
     summary.stopped_during = error ? error_phase : stop_phase;

@@ -140,6 +140,8 @@ class Reconstruction {
   struct Stages;
   std::unique_ptr<Stages> MakeStages(FrameSource& source, RunSink* sink, RunSink* without_fill,
                                      bool live) const;
+  // report.json's stages.cpu_seconds: each stage's threads, the process's, the cores used.
+  static nlohmann::ordered_json CpuReportOf(const Stages& s, double process_cpu_s, double seconds);
   ReconstructionSummary Summarise(const FrameSource& source, const Stages& s,
                                   const std::exception_ptr& error, const std::string& stop_reason,
                                   double seconds) const;

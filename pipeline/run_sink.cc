@@ -14,6 +14,7 @@
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
 #include "acquisition/json_text.h"
+#include "acquisition/run_layout.h"
 #include "surfels/ply.h"
 
 namespace fs = std::filesystem;
@@ -115,27 +116,27 @@ std::string FolderRunSink::File(const std::string& relative) {
 void FolderRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& frame,
                                   const CarriedFillResult& fill) {
   // keyframes/ comes with the first keyframe: a run without fill has none.
-  auto keyframe = [&](const char* suffix) { return File("keyframes/" + name + suffix); };
-  WriteImage(keyframe(".hole_mask.png"), frame.hole_mask);
-  WriteImage(keyframe(".depth_filled.png"), ToMillimetres(fill.filled_depth));
+  auto keyframe = [&](KeyframeImage image) { return File(RunLayout::Keyframe(name, image)); };
+  WriteImage(keyframe(KeyframeImage::kHoleMask), frame.hole_mask);
+  WriteImage(keyframe(KeyframeImage::kDepthFilled), ToMillimetres(fill.filled_depth));
   if (fill.confidence.type() == CV_32FC1 && fill.fill_mask.type() == CV_8UC1) {
     // The fill's confidence on the filled pixels, 0-255 for 0-1; 0 elsewhere.
     cv::Mat confidence;
     fill.confidence.convertTo(confidence, CV_8U, 255.0);
     confidence.setTo(0, fill.fill_mask == 0);
-    WriteImage(keyframe(".fill_confidence.png"), confidence);
+    WriteImage(keyframe(KeyframeImage::kFillConfidence), confidence);
   }
   const bool has_color = frame.color.type() == CV_8UC3 && frame.color.size() == frame.depth.size();
   if (has_color) {
-    WriteImage(keyframe(".fill_overlay.png"), FillOverlay(frame.color, fill));
-    WriteImage(keyframe(".color.png"), frame.color);  // for colmap-export
+    WriteImage(keyframe(KeyframeImage::kFillOverlay), FillOverlay(frame.color, fill));
+    WriteImage(keyframe(KeyframeImage::kColor), frame.color);  // for colmap-export
   }
   // The pinhole set (undistorted/), colour and depth under the same file name.
   const std::string file = IndexedFileName(frame.index, frame.timestamp_text);
-  WriteImage(File("undistorted/depth/" + file),
+  WriteImage(File(RunLayout::Undistorted("depth/" + file)),
              Undistort(ToMillimetres(fill.filled_depth), cv::INTER_NEAREST));
   if (has_color)
-    WriteImage(File("undistorted/color/" + file), Undistort(frame.color, cv::INTER_LINEAR));
+    WriteImage(File(RunLayout::Undistorted("color/" + file)), Undistort(frame.color, cv::INTER_LINEAR));
   std::lock_guard<std::mutex> lock(mutex_);
   keyframes_[frame.index] = {name, file};
 }
@@ -149,8 +150,8 @@ cv::Mat FolderRunSink::Undistort(const cv::Mat& image, int interpolation) const 
 
 void FolderRunSink::PrepareCompletion(const std::vector<std::string>& names) {
   for (const std::string& name : names)
-    for (const char* suffix : {".glass_mask.png", ".model_fill.png"})
-      File("keyframes/" + name + suffix);
+    for (KeyframeImage image : {KeyframeImage::kGlassMask, KeyframeImage::kModelFill})
+      File(RunLayout::Keyframe(name, image));
 }
 
 int FolderRunSink::CompleteKeyframe(const std::string& name, const MapCompletion& offer) {
@@ -161,13 +162,14 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const MapCompletion
       if (written.name == name) pinhole_file = written.pinhole_file;
   }
   if (pinhole_file.empty()) throw std::out_of_range("no keyframe " + name + " written");
-  const std::string base = (fs::path(out_dir_) / "keyframes" / name).string();
-  const cv::Mat mm = cv::imread(base + ".depth_filled.png", cv::IMREAD_UNCHANGED);
-  const cv::Mat holes = cv::imread(base + ".hole_mask.png", cv::IMREAD_UNCHANGED);
-  cv::Mat confidence_8u = cv::imread(base + ".fill_confidence.png", cv::IMREAD_UNCHANGED);
+  const RunLayout run(out_dir_);
+  const cv::Mat mm = cv::imread(run.Path(name, KeyframeImage::kDepthFilled), cv::IMREAD_UNCHANGED);
+  const cv::Mat holes = cv::imread(run.Path(name, KeyframeImage::kHoleMask), cv::IMREAD_UNCHANGED);
+  cv::Mat confidence_8u =
+      cv::imread(run.Path(name, KeyframeImage::kFillConfidence), cv::IMREAD_UNCHANGED);
   if (mm.type() != CV_16UC1 || holes.type() != CV_8UC1 || mm.size() != holes.size() ||
       mm.size() != offer.depth.size())
-    throw InputError(base + ".depth_filled.png",
+    throw InputError(run.Path(name, KeyframeImage::kDepthFilled),
                      "cannot be read back with its hole mask at the camera's size");
   if (confidence_8u.type() != CV_8UC1 || confidence_8u.size() != mm.size())
     confidence_8u = cv::Mat::zeros(mm.size(), CV_8UC1);  // a keyframe whose fill failed has none
@@ -175,14 +177,14 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const MapCompletion
   mm.convertTo(filled, CV_32F, 0.001);
   confidence_8u.convertTo(confidence, CV_32F, 1.0 / 255);
   const bool glass = !offer.glass.empty() && offer.glass.size() == mm.size();
-  if (glass) WriteImage(File("keyframes/" + name + ".glass_mask.png"), offer.glass);
+  if (glass) WriteImage(File(RunLayout::Keyframe(name, KeyframeImage::kGlassMask)), offer.glass);
   const int pixels = CompleteFromModel(holes, offer, &filled, &confidence, &completed);
   const bool any_glass = glass && cv::countNonZero(offer.glass) > 0;
   if (pixels == 0 && !any_glass) return 0;
   // The overlay shows the completed pixels orange (they were magenta: holes left empty) and the
   // glass cyan.
-  const cv::Mat color = cv::imread(base + ".color.png", cv::IMREAD_COLOR);
-  cv::Mat overlay = cv::imread(base + ".fill_overlay.png", cv::IMREAD_COLOR);
+  const cv::Mat color = cv::imread(run.Path(name, KeyframeImage::kColor), cv::IMREAD_COLOR);
+  cv::Mat overlay = cv::imread(run.Path(name, KeyframeImage::kFillOverlay), cv::IMREAD_COLOR);
   if (!color.empty() && color.size() == overlay.size() && color.size() == completed.size()) {
     cv::Mat tinted;
     cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(0, 165, 255)), 0.5, 0,
@@ -193,22 +195,23 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const MapCompletion
                       0, tinted);
       tinted.copyTo(overlay, offer.glass);
     }
-    WriteImage(File("keyframes/" + name + ".fill_overlay.png"), overlay);
+    WriteImage(File(RunLayout::Keyframe(name, KeyframeImage::kFillOverlay)), overlay);
   }
   if (pixels == 0) return 0;
   // depth_filled.png (what users and the figures read) last: when an earlier write fails it stays
   // as the keyframe's fill left it, and the warning says the keyframe was not completed.
   const cv::Mat completed_mm = ToMillimetres(filled);
-  WriteImage(File("keyframes/" + name + ".model_fill.png"), completed);
+  WriteImage(File(RunLayout::Keyframe(name, KeyframeImage::kModelFill)), completed);
   confidence.convertTo(confidence_8u, CV_8U, 255.0);
-  WriteImage(File("keyframes/" + name + ".fill_confidence.png"), confidence_8u);
-  WriteImage(File("undistorted/depth/" + pinhole_file), Undistort(completed_mm, cv::INTER_NEAREST));
-  WriteImage(File("keyframes/" + name + ".depth_filled.png"), completed_mm);
+  WriteImage(File(RunLayout::Keyframe(name, KeyframeImage::kFillConfidence)), confidence_8u);
+  WriteImage(File(RunLayout::Undistorted("depth/" + pinhole_file)),
+             Undistort(completed_mm, cv::INTER_NEAREST));
+  WriteImage(File(RunLayout::Keyframe(name, KeyframeImage::kDepthFilled)), completed_mm);
   return pixels;
 }
 
 void FolderRunSink::WriteTrajectory(const Trajectory& trajectory) {
-  WriteTumTrajectory(File("trajectory.txt"), trajectory);
+  WriteTumTrajectory(File(RunLayout::kTrajectory), trajectory);
   std::map<std::string, SE3> poses;
   for (const StampedPose& p : trajectory) poses[PoseName(p)] = p.world_from_camera;
   Trajectory keyframes;  // undistorted/trajectory.log: entry k is the k-th file, by name
@@ -218,30 +221,31 @@ void FolderRunSink::WriteTrajectory(const Trajectory& trajectory) {
     if (pose == poses.end()) continue;  // a keyframe whose pose the run did not keep
     keyframes.push_back({static_cast<double>(keyframes.size()), "", pose->second});
   }
-  if (!keyframes.empty()) WriteRedwoodLog(File("undistorted/trajectory.log"), keyframes);
+  if (!keyframes.empty()) WriteRedwoodLog(File(RunLayout::Undistorted("trajectory.log")), keyframes);
 }
 
 void FolderRunSink::WriteCamera(const CameraFile& camera) {
-  SaveCameraFile(File("camera.json"), camera);
+  SaveCameraFile(File(RunLayout::kCamera), camera);
   undistort_x_ = undistort_y_ = cv::Mat();
   if (camera.camera.HasDistortion()) camera.camera.UndistortionMaps(&undistort_x_, &undistort_y_);
   CameraFile pinhole = camera;
   pinhole.camera.distortion = {};
-  SaveCameraFile(File("undistorted/camera.json"), pinhole);
+  SaveCameraFile(File(RunLayout::Undistorted("camera.json")), pinhole);
   const Camera& c = pinhole.camera;
   const nlohmann::ordered_json open3d = {
       {"width", c.width},
       {"height", c.height},
       {"intrinsic_matrix", {c.fx, 0.0, 0.0, 0.0, c.fy, 0.0, c.cx, c.cy, 1.0}}};  // column-major
-  WriteTextFileAtomically(File("undistorted/camera_intrinsic.json"), open3d.dump(2) + "\n");
+  WriteTextFileAtomically(File(RunLayout::Undistorted("camera_intrinsic.json")),
+                          open3d.dump(2) + "\n");
 }
 
 void FolderRunSink::WriteReport(const nlohmann::ordered_json& report) {
-  WriteTextFileAtomically(File("report.json"), JsonText(report) + "\n");
+  WriteTextFileAtomically(File(RunLayout::kReport), JsonText(report) + "\n");
 }
 
 void FolderRunSink::WriteMap(const std::vector<Surfel>& surfels) {
-  WriteSurfelPly(File("map.ply"), surfels);
+  WriteSurfelPly(File(RunLayout::kMap), surfels);
 }
 
 void InMemoryRunSink::WriteMap(const std::vector<Surfel>& surfels) {

@@ -10,6 +10,16 @@
 
 namespace gf {
 
+// A closed set as its name; a name outside it is refused (nlohmann's NLOHMANN_JSON_SERIALIZE_ENUM
+// would read it silently as the first value).
+void to_json(nlohmann::json& j, ReadoutOrder order) { j = ReadoutOrderName(order); }
+void from_json(const nlohmann::json& j, ReadoutOrder& order) {
+  if (!j.is_string() || !ParseReadoutOrder(j.get<std::string>(), &order))
+    throw std::invalid_argument(
+        "tracker.depth_readout_order must be top_to_bottom, bottom_to_top, left_to_right or "
+        "right_to_left, not " + j.dump());
+}
+
 // JSON conversions of the Options structs, field by field (nlohmann's macros). They live here, at
 // the command line's edge, so that the algorithms' headers stay free of JSON.
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(IcpOptions, iterations, max_distance_m, max_normal_angle_deg,
@@ -206,6 +216,8 @@ void ApplyConfig(const std::string& text, const std::string& path, Reconstructio
     merged.at("glass").get_to(o.fusion_options.fusion.glass);
     merged.at("loop_closure").get_to(o.loop_options);
   } catch (const nlohmann::json::exception& e) {
+    throw InputError(path, std::string("bad setting: ") + e.what());
+  } catch (const std::invalid_argument& e) {  // a name outside its closed set
     throw InputError(path, std::string("bad setting: ") + e.what());
   }
   // In order, stopping at the first refusal: its message, which starts with the field's name

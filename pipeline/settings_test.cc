@@ -103,8 +103,15 @@ TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
   // The old place of a setting is refused: the pair geometry is one setting, fill.geometry.
   EXPECT_EQ(Problem(R"({"fill": {"pairs": {"epipole_margin_px": 60}}})", &options),
             "unknown setting 'fill.pairs.epipole_margin_px'");
+  // A closed set: a name outside it is refused, not read as its first value.
+  EXPECT_EQ(Problem(R"({"tracker": {"depth_readout_order": "diagonal"}})", &options),
+            "bad setting: tracker.depth_readout_order must be top_to_bottom, bottom_to_top, "
+            "left_to_right or right_to_left, not \"diagonal\"");
   EXPECT_EQ(SettingsToJson(options), before);
   EXPECT_EQ(Problem(R"({"fill": {"geometry": {"epipole_margin_px": 60}}})", &options), "");
+  EXPECT_EQ(Problem(R"({"tracker": {"depth_readout_order": "right_to_left"}})", &options), "");
+  EXPECT_EQ(options.tracker.depth_readout_order, ReadoutOrder::kRightToLeft);
+  EXPECT_EQ(SettingsToJson(options)["tracker"]["depth_readout_order"], "right_to_left");
   EXPECT_EQ(options.fill_options.Filler().pairs.geometry.epipole_margin_px, 60);
   EXPECT_EQ(options.fill_options.Filler().stereo.geometry.epipole_margin_px, 60);
 }

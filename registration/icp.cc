@@ -161,6 +161,50 @@ Eigen::Vector2d ReprojectionResidual(const SE3& t, const Camera& camera, const E
                          camera.fy * x.y() * iz + camera.cy - u.y());
 }
 
+namespace {
+
+// The dense term: fixed horizontal stripes accumulated in parallel, summed in stripe order, so
+// the result does not depend on thread scheduling.
+DenseAccumulator AccumulateDenseStripes(const DenseLevel& level) {
+  constexpr int kStripes = 16;
+  const int rows = level.cur_v.rows;
+  std::array<DenseAccumulator, kStripes> parts;
+  cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
+    for (int stripe = range.start; stripe < range.end; ++stripe)
+      parts[stripe] =
+          AccumulateDense(level, rows * stripe / kStripes, rows * (stripe + 1) / kStripes);
+  });
+  DenseAccumulator dense;
+  for (const DenseAccumulator& part : parts) dense += part;
+  return dense;
+}
+
+// The features' reprojection term at pyramid `level` (pixels observed at level 0), Huber-weighted,
+// added to the upper triangle of h and to g. Returns the features within the Huber threshold.
+int AddFeatureTerm(const std::vector<FeatureCorrespondence>& features, const SE3& t,
+                   const Camera& cam, int level, const IcpOptions& options,
+                   Eigen::Matrix<double, 6, 6>* h, Eigen::Matrix<double, 6, 1>* g) {
+  const double feature_scale = 1.0 / options.feature_sigma_px;
+  int feature_inliers = 0;
+  for (const FeatureCorrespondence& f : features) {
+    if ((t * f.point_in_current).z() <= 0) continue;
+    Eigen::Matrix<double, 2, 6> j;
+    // Features are observed at level 0: scale pixels to this level.
+    const double s = std::ldexp(1.0, -level);
+    const Eigen::Vector2d pixel = (f.pixel_in_reference.array() + 0.5) * s - 0.5;
+    const Eigen::Vector2d residual = ReprojectionResidual(t, cam, f.point_in_current, pixel, &j);
+    const double norm = residual.norm() * feature_scale / s;
+    feature_inliers += norm <= options.feature_huber;
+    const double w = options.feature_weight * HuberWeight(norm, options.feature_huber) *
+                     feature_scale * feature_scale / (s * s);
+    h->selfadjointView<Eigen::Upper>().rankUpdate(j.transpose(), w);
+    *g += w * j.transpose() * residual;
+  }
+  return feature_inliers;
+}
+
+}  // namespace
+
 IcpSummary AlignPointToPlane(const DepthPyramid& reference, const DepthPyramid& current,
                              const SE3& initial, const IcpOptions& options,
                              const std::vector<FeatureCorrespondence>& features) {
@@ -174,7 +218,6 @@ IcpSummary AlignPointToPlane(const DepthPyramid& reference, const DepthPyramid& 
   const double cos_max_angle = std::cos(options.max_normal_angle_deg * M_PI / 180.0);
   const double plane_scale = 1.0 / options.plane_sigma_m;
   const double sigma_at_1m = options.noise_a_m + options.noise_b_per_m * 0.36;
-  const double feature_scale = 1.0 / options.feature_sigma_px;
   const int n_levels = static_cast<int>(options.iterations.size());
   bool converged_at_finest = false;
 
@@ -189,41 +232,15 @@ IcpSummary AlignPointToPlane(const DepthPyramid& reference, const DepthPyramid& 
     for (int it = 0; it <= options.iterations[li]; ++it) {
       // The extra pass after the last step only measures (inliers, RMSE, information).
       const bool measure_only = it == options.iterations[li];
-      // Dense term: fixed horizontal stripes accumulated in parallel, summed in stripe order, so
-      // the result does not depend on thread scheduling.
-      constexpr int kStripes = 16;
-      std::array<DenseAccumulator, kStripes> parts;
-      const DenseLevel level_data{cam, ref_v,         ref_n,       cur_v,       cur_n,
-                                  t,   cos_max_angle, plane_scale, sigma_at_1m, &options};
-      cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
-        for (int stripe = range.start; stripe < range.end; ++stripe)
-          parts[stripe] = AccumulateDense(level_data, cur_v.rows * stripe / kStripes,
-                                          cur_v.rows * (stripe + 1) / kStripes);
-      });
-      DenseAccumulator dense;
-      for (const DenseAccumulator& part : parts) dense += part;
+      const DenseAccumulator dense = AccumulateDenseStripes(
+          {cam, ref_v, ref_n, cur_v, cur_n, t, cos_max_angle, plane_scale, sigma_at_1m, &options});
       Eigen::Matrix<double, 6, 6> h = dense.h;
       Eigen::Matrix<double, 6, 1> g = dense.g;
       const int inliers = dense.inliers, valid = dense.valid;
       const double sum2 = dense.sum2;
       int feature_inliers = 0;
-      if (options.feature_weight > 0 && level >= options.feature_min_level) {
-        for (const FeatureCorrespondence& f : features) {
-          if ((t * f.point_in_current).z() <= 0) continue;
-          Eigen::Matrix<double, 2, 6> j;
-          // Features are observed at level 0: scale pixels to this level.
-          const double s = std::ldexp(1.0, -level);
-          const Eigen::Vector2d pixel = (f.pixel_in_reference.array() + 0.5) * s - 0.5;
-          const Eigen::Vector2d residual =
-              ReprojectionResidual(t, cam, f.point_in_current, pixel, &j);
-          const double norm = residual.norm() * feature_scale / s;
-          feature_inliers += norm <= options.feature_huber;
-          const double w = options.feature_weight * HuberWeight(norm, options.feature_huber) *
-                           feature_scale * feature_scale / (s * s);
-          h.selfadjointView<Eigen::Upper>().rankUpdate(j.transpose(), w);
-          g += w * j.transpose() * residual;
-        }
-      }
+      if (options.feature_weight > 0 && level >= options.feature_min_level)
+        feature_inliers = AddFeatureTerm(features, t, cam, level, options, &h, &g);
       h = h.selfadjointView<Eigen::Upper>();
       if (finest) {
         summary.inliers = inliers;

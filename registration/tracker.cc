@@ -21,7 +21,6 @@ bool KeyframePolicy::Check(std::string* message) const {
 }
 
 bool TrackerOptions::Check(std::string* message) const {
-  ReadoutOrder order;
   FieldCheck c(message);
   c.In("pyramid_levels", pyramid_levels, 1, kMaxPyramidLevels, kMoreLevelsThanAnyPyramid)
       .Require(pyramid_levels >= static_cast<int>(icp.iterations.size()),
@@ -31,9 +30,6 @@ bool TrackerOptions::Check(std::string* message) const {
       // A readout of a second or more is no video sensor's.
       .In("depth_readout_s", depth_readout_s, 0, 1, "is a readout longer than a second")
       .Require(depth_readout_s < 1, "depth_readout_s must be less than a second")
-      .Require(ParseReadoutOrder(depth_readout_order, &order),
-               "depth_readout_order must be top_to_bottom, bottom_to_top, left_to_right or "
-               "right_to_left")
       .In("relocalise_frames", relocalise_frames, 0, kMaxCaptureFrames, kMoreFramesThanACapture)
       // A full turn per metre travelled: no drift worth simulating is larger.
       .In("simulated_drift_deg_per_m", simulated_drift_deg_per_m, -360, 360,
@@ -64,14 +60,6 @@ const char* TrackingStatusName(TrackingStatus status) {
   return "unknown";
 }
 
-namespace {
-ReadoutOrder ReadoutOrderOf(const TrackerOptions& options) {
-  ReadoutOrder order = ReadoutOrder::kTopToBottom;
-  ParseReadoutOrder(options.depth_readout_order, &order);  // checked by options.Check()
-  return order;
-}
-}  // namespace
-
 TrackerOptions ForSensor(TrackerOptions options, const CameraFile& camera) {
   if (camera.depth_readout_s) options.depth_readout_s = *camera.depth_readout_s;
   if (camera.depth_readout_order) options.depth_readout_order = *camera.depth_readout_order;
@@ -88,7 +76,7 @@ std::string TrackingResult::BriefReport() const {
 FrameToKeyframeTracker::FrameToKeyframeTracker(const Camera& camera, const TrackerOptions& options)
     : camera_(camera),
       pinhole_(camera),
-      shutter_(camera, options.depth_readout_s, ReadoutOrderOf(options)),
+      shutter_(camera, options.depth_readout_s, options.depth_readout_order),
       options_(options) {
   std::string problem;
   GF_CHECK(options_.Check(&problem), problem);

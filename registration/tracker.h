@@ -81,7 +81,7 @@ struct TrackerOptions {
   // moved with the step that measured and aligned again).
   double depth_readout_s = 1.0 / 30.0;
   // The order of the readout's lines (rolling_shutter.h): camera.json's depth_readout_order.
-  std::string depth_readout_order = "top_to_bottom";
+  ReadoutOrder depth_readout_order = ReadoutOrder::kTopToBottom;
   double max_jump_m = 0.15;       // larger correction of the prediction: treated as lost
   double max_jump_deg = 15.0;
   // After a loss, frames looked up among earlier keyframes (with a Relocaliser) before tracking

@@ -6,12 +6,12 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "acquisition/run_layout.h"
 #include "acquisition/file_util.h"
 #include "acquisition/trajectory.h"
 #include "pipeline/run_sink.h"
 #include "report/run_report.h"
 
-namespace fs = std::filesystem;
 
 namespace gf {
 namespace {
@@ -31,11 +31,11 @@ std::vector<std::pair<std::string, std::string>> Renderings(const std::string& o
                                                             const std::string& middle_frame) {
   std::vector<std::pair<std::string, std::string>> images;
   for (const std::string view : {"camera", "above"})
-    for (const std::string map : {"with_fill", "without_fill"}) {
-      const std::string file = map + "_" + view + ".png";
-      if (!IsRegularFile((fs::path(out_dir) / file).string())) continue;
+    for (const bool with_fill : {true, false}) {
+      const std::string file = RunLayout::Rendering(with_fill, view);
+      if (!IsRegularFile(RunLayout(out_dir).Path(file))) continue;
       images.push_back(
-          {prefix + file, std::string(map == "with_fill" ? "with" : "without") +
+          {prefix + file, std::string(with_fill ? "with" : "without") +
                               " the fill, seen from " +
                               (view == "camera" ? middle_frame + "'s viewpoint" : "above")});
     }
@@ -57,11 +57,11 @@ std::vector<std::vector<std::string>> CompletenessRows(const json& compare, cons
 
 void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std::string& prefix,
                            const ReportFile& file) {
-  const fs::path dir(out_dir);
-  const json c = json::parse(ReadTextFile((dir / "compare.json").string()));
-  const json run = json::parse(ReadTextFile((dir / "with_fill/report.json").string()));
+  const RunLayout folder(out_dir), with_fill = folder.Map(true), without_fill = folder.Map(false);
+  const json c = json::parse(ReadTextFile(folder.Path(RunLayout::kCompare)));
+  const json run = json::parse(ReadTextFile(with_fill.Path(RunLayout::kReport)));
   const std::string input = c["input"];
-  const Trajectory estimate = ReadTumTrajectory((dir / "with_fill/trajectory.txt").string());
+  const Trajectory estimate = ReadTumTrajectory(with_fill.Path(RunLayout::kTrajectory));
   const std::string truth_file = GroundTruthBeside(input);
   const Trajectory truth = truth_file.empty() ? Trajectory() : ReadTrajectory(truth_file);
   const double ate = c.value("ate_m", 0.0);
@@ -77,8 +77,8 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
       Renderings(out_dir, prefix, FrameLabel(IndexedFileName(middle_index, middle.timestamp_text))),
       440);
   AddMapView(r, file,
-             {{"with fill", (dir / "with_fill").string(), prefix + "with_fill/"},
-              {"without fill", (dir / "without_fill").string(), prefix + "without_fill/"}});
+             {{"with fill", with_fill.dir(), prefix + RunLayout::kWithFill + "/"},
+              {"without fill", without_fill.dir(), prefix + RunLayout::kWithoutFill + "/"}});
   if (c["with_fill"].contains("completeness")) {
     r->Paragraph(
         "Completeness: the share of the true surfaces the camera saw that have a surfel "
@@ -122,15 +122,15 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
   r->Heading("Trajectory");
   AddTrajectoryFigure(r, estimate, c.contains("ate_m") ? truth : Trajectory());
   r->Heading("Stereo fill");
-  AddFillOverlays(r, (dir / "with_fill").string(), prefix + "with_fill/");
+  AddFillOverlays(r, with_fill.dir(), prefix + RunLayout::kWithFill + "/");
   r->Heading("Time per stage");
   AddStageTimings(r, run);
   r->Heading("Settings and files");
   AddSettings(r, run);
-  r->Links({{prefix + "compare.json", "compare.json", "the figures above, as numbers"}});
-  for (const char* v : {"with_fill", "without_fill"}) {
+  r->Links({{prefix + RunLayout::kCompare, RunLayout::kCompare, "the figures above, as numbers"}});
+  for (const char* v : {RunLayout::kWithFill, RunLayout::kWithoutFill}) {
     r->Paragraph(std::string(v) + "/:");
-    AddFileLinks(r, (dir / v).string(), prefix + v + "/");
+    AddFileLinks(r, folder.Path(v), prefix + v + "/");
   }
 }
 

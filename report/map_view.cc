@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "acquisition/run_layout.h"
 #include "acquisition/camera.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
@@ -70,7 +71,7 @@ json Base64Chunks(const std::string& bytes) {
 }
 
 json MapJson(const ViewedMap& map) {
-  const std::string ply = (fs::path(map.run_dir) / "map.ply").string();
+  const std::string ply = RunLayout(map.run_dir).Path(RunLayout::kMap);
   const std::vector<Surfel> surfels = IsRegularFile(ply) ? ReadSurfelPly(ply) : std::vector<Surfel>();
   const std::vector<Surfel> shown = ForThePage(surfels);
   return {{"name", map.name},
@@ -81,7 +82,7 @@ json MapJson(const ViewedMap& map) {
 
 // The camera path, and each keyframe's pose and fill overlay (paths relative to the report).
 void AddPath(const ViewedMap& map, json* view) {
-  const std::string path = (fs::path(map.run_dir) / "trajectory.txt").string();
+  const std::string path = RunLayout(map.run_dir).Path(RunLayout::kTrajectory);
   const Trajectory trajectory = IsRegularFile(path) ? ReadTumTrajectory(path) : Trajectory();
   json centres = json::array();
   for (const StampedPose& p : trajectory) {
@@ -102,14 +103,14 @@ void AddPath(const ViewedMap& map, json* view) {
     json pose = json::array();
     for (int row = 0; row < 4; ++row)
       for (int col = 0; col < 4; ++col) pose.push_back(m(row, col));
-    const std::string overlay = "keyframes/" + ts + ".fill_overlay.png";
-    const bool has_overlay = IsRegularFile((fs::path(map.run_dir) / overlay).string());
+    const std::string overlay = RunLayout::Keyframe(ts, KeyframeImage::kFillOverlay);
+    const bool has_overlay = IsRegularFile(RunLayout(map.run_dir).Path(overlay));
     keyframes.push_back({{"label", FrameLabel(file)},
                          {"world_from_camera", pose},
                          {"overlay", has_overlay ? map.prefix + overlay : ""}});
   }
   (*view)["keyframes"] = keyframes;
-  const std::string camera_file = (fs::path(map.run_dir) / "camera.json").string();
+  const std::string camera_file = RunLayout(map.run_dir).Path(RunLayout::kCamera);
   const Camera c = IsRegularFile(camera_file) ? LoadCameraFile(camera_file).camera : Camera();
   (*view)["camera"] = {{"width", c.width}, {"height", c.height}, {"fx", c.fx},
                        {"fy", c.fy},       {"cx", c.cx},         {"cy", c.cy}};

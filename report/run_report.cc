@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "acquisition/run_layout.h"
 #include "acquisition/file_util.h"
 #include "acquisition/json_text.h"
 #include "acquisition/trajectory_metrics.h"
@@ -44,7 +45,7 @@ std::string Format(const char* format, double value) {
 
 std::vector<std::string> KeyframeFiles(const std::string& run_dir) {
   std::vector<std::string> names;
-  const fs::path dir = fs::path(run_dir) / "undistorted" / "color";
+  const fs::path dir = RunLayout(run_dir).Path(RunLayout::Undistorted("color"));
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return names;
   for (const auto& entry : fs::directory_iterator(dir, ec))
@@ -178,8 +179,8 @@ void AddFillOverlays(HtmlReport* r, const std::string& run_dir, const std::strin
     const std::string& file = files[i];
     const std::string ts = StampOfIndexedName(file);
     if (ts.empty()) continue;  // no timestamp: keyframes/ names it by index
-    const std::string overlay = "keyframes/" + ts + ".fill_overlay.png";
-    if (IsRegularFile((fs::path(run_dir) / overlay).string()))
+    const std::string overlay = RunLayout::Keyframe(ts, KeyframeImage::kFillOverlay);
+    if (IsRegularFile(RunLayout(run_dir).Path(overlay)))
       images.push_back({prefix + overlay, FrameLabel(file)});
   }
   if (images.empty()) return;
@@ -221,26 +222,26 @@ void AddSettings(HtmlReport* r, const json& report) {
 
 void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& prefix) {
   static const std::vector<std::pair<std::string, std::string>> files = {
-      {"map.ply",
+      {RunLayout::kMap,
        "the surfel map (binary PLY: x y z nx ny nz red green blue radius confidence "
        "source)"},
-      {"mesh.ply", "a triangle mesh of the map (--mesh)"},
-      {"trajectory.txt", "every frame's world_from_camera (TUM format)"},
-      {"report.json", "everything on this page, as numbers"},
-      {"camera.json", "the camera of keyframes/ (the input's, with its lens distortion)"},
-      {"keyframes/", "per keyframe: hole mask, filled depth (mm), fill overlay, colour"},
-      {"undistorted/", "the keyframes on the pinhole camera: color/, depth/ (mm)"},
-      {"undistorted/camera_intrinsic.json", "their camera, as Open3D reads it"},
-      {"undistorted/trajectory.log", "their poses, as Open3D reads them (Redwood .log)"}};
+      {RunLayout::kMesh, "a triangle mesh of the map (--mesh)"},
+      {RunLayout::kTrajectory, "every frame's world_from_camera (TUM format)"},
+      {RunLayout::kReport, "everything on this page, as numbers"},
+      {RunLayout::kCamera, "the camera of keyframes/ (the input's, with its lens distortion)"},
+      {std::string(RunLayout::kKeyframes) + "/", "per keyframe: hole mask, filled depth (mm), fill overlay, colour"},
+      {RunLayout::Undistorted(""), "the keyframes on the pinhole camera: color/, depth/ (mm)"},
+      {RunLayout::Undistorted("camera_intrinsic.json"), "their camera, as Open3D reads it"},
+      {RunLayout::Undistorted("trajectory.log"), "their poses, as Open3D reads them (Redwood .log)"}};
   std::vector<std::vector<std::string>> links;
   for (const auto& [name, what] : files)
-    if (fs::exists(fs::path(run_dir) / name)) links.push_back({prefix + name, name, what});
+    if (fs::exists(RunLayout(run_dir).Path(name))) links.push_back({prefix + name, name, what});
   r->Links(links);
 }
 
 void WriteRunReport(const std::string& run_dir, const std::string& input, const json& report,
                     const ReportFile& file) {
-  const Trajectory estimate = ReadTumTrajectory((fs::path(run_dir) / "trajectory.txt").string());
+  const Trajectory estimate = ReadTumTrajectory(RunLayout(run_dir).Path(RunLayout::kTrajectory));
   const std::string truth_file = GroundTruthBeside(input);
   const Trajectory truth = truth_file.empty() ? Trajectory() : ReadTrajectory(truth_file);
   const TrajectoryErrorSummary ate = EvaluateTrajectory(truth, estimate);
@@ -261,7 +262,7 @@ void WriteRunReport(const std::string& run_dir, const std::string& input, const 
   r.Heading("Settings and files");
   AddSettings(&r, report);
   AddFileLinks(&r, run_dir, "");
-  WriteTextFileAtomically((fs::path(run_dir) / "report.html").string(), r.Html());
+  WriteTextFileAtomically(RunLayout(run_dir).Path(RunLayout::kPage), r.Html());
 }
 
 }  // namespace gf

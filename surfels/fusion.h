@@ -306,6 +306,9 @@ class SurfelFusion {
   void NearestPerPixel();
   void CleanUp(const Measurement& m, FusionStats* stats);
   void RemoveSeenThrough(const Measurement& m, FusionStats* stats);
+  // RemoveSeenThrough's second half, in entry order: the readings_ it gathered applied to the
+  // surfels (transparent or not, free space's penalty or removal).
+  void ApplyReadings(FusionStats* stats);
   void MergeRedundant(FusionStats* stats);
   // Sets partner_[e] to the entry that entry e is a copy of (-1: none), for MergeRedundant.
   void FindCopies();

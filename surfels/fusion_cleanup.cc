@@ -161,7 +161,15 @@ void SurfelFusion::RemoveSeenThrough(const Measurement& m, FusionStats* stats) {
       readings[e] = r;
     }
   });
-  for (size_t e = 0; e < entries; ++e) {
+  ApplyReadings(stats);
+}
+
+void SurfelFusion::ApplyReadings(FusionStats* stats) {
+  const GlassOptions& glass = options_.glass;
+  const uint8_t sensor = static_cast<uint8_t>(DepthSource::kSensor);
+  const uint8_t transparent = static_cast<uint8_t>(DepthSource::kTransparent);
+  const std::vector<EntryReadings>& readings = readings_;
+  for (size_t e = 0; e < readings.size(); ++e) {
     const EntryReadings& r = readings[e];
     const size_t i = visible_[e];
     Surfel& s = map_[i];

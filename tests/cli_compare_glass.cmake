@@ -1,10 +1,11 @@
-# End-to-end: `glassfusion compare` on a synthetic glass capture (no datasets needed; seed 11,
-# never used for tuning): both run folders are complete, the map with the fill covers the glossy,
-# dark and textured-glass surfaces far better than the sensor's alone, its filled surfels lie on
-# the true surfaces, and map.ply reads back in Open3D (python3-open3d; skipped when absent).
+# End-to-end: `glassfusion compare` on a short synthetic glass capture (seed 11): the command
+# writes both run folders, compare.json and report.html; `eval --map` scores the same map as
+# compare.json does; map.ply and `reconstruct --mesh`'s mesh.ply read back in Open3D
+# (python3-open3d; skipped when absent). What the fill adds to the map is checked in-process on
+# 30 frames (runs/compare_test.cc).
 set(tmp "${CMAKE_CURRENT_BINARY_DIR}/cli_compare_glass_tmp")
 file(REMOVE_RECURSE "${tmp}")
-execute_process(COMMAND "${GLASSFUSION}" synth --scene glass-table --frames 30 --seed 11 --out
+execute_process(COMMAND "${GLASSFUSION}" synth --scene glass-table --frames 12 --seed 11 --out
                         "${tmp}/scene" RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "synth failed (${rc}): ${err}")
@@ -21,19 +22,6 @@ foreach(f compare.json report.html with_fill/map.ply with_fill/trajectory.txt wi
   endif()
 endforeach()
 file(READ "${tmp}/cmp/compare.json" compare)
-foreach(material glossy dark textured_glass)
-  string(JSON with GET "${compare}" with_fill completeness per_material ${material} within_2cm)
-  string(JSON without GET "${compare}" without_fill completeness per_material ${material} within_2cm)
-  message("${material}: within 2 cm ${with} with the fill, ${without} without")
-  if(with LESS 0.6 OR without GREATER 0.3)
-    message(FATAL_ERROR "${material}: ${with} with the fill, ${without} without (want >= 0.6, <= 0.3)")
-  endif()
-endforeach()
-string(JSON fill_median GET "${compare}" with_fill accuracy fill_median_m)
-message("filled surfels: median distance to the true surface ${fill_median} m")
-if(fill_median GREATER 0.01)
-  message(FATAL_ERROR "filled surfels' median distance ${fill_median} m exceeds 1 cm")
-endif()
 string(JSON count GET "${compare}" with_fill surfels count)
 # eval --map --gt-mesh scores the same map the same way.
 execute_process(COMMAND "${GLASSFUSION}" eval --gt "${tmp}/scene/groundtruth.txt" --est

@@ -1,9 +1,10 @@
-#include "apps/compare.h"
+#include "runs/compare.h"
 
 #include <cstdio>
 #include <filesystem>
 #include <utility>
 
+#include "acquisition/run_layout.h"
 #include "acquisition/camera.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
@@ -28,18 +29,16 @@ using json = nlohmann::ordered_json;
 // Both maps rendered from the same two viewpoints: the middle frame's, and looking down on the map
 // from above and behind that camera. Written as DIR/<map>_<view>.png.
 void WriteRenderings(RunFolder* out, const Camera& camera, const Trajectory& trajectory) {
-  const std::vector<Surfel> with =
-      ReadSurfelPly((fs::path(out->dir()) / "with_fill/map.ply").string());
-  const std::vector<Surfel> without =
-      ReadSurfelPly((fs::path(out->dir()) / "without_fill/map.ply").string());
+  const RunLayout folder(out->dir());
+  const std::vector<Surfel> with = ReadSurfelPly(folder.Map(true).Path(RunLayout::kMap));
+  const std::vector<Surfel> without = ReadSurfelPly(folder.Map(false).Path(RunLayout::kMap));
   if (trajectory.empty() || with.empty()) return;
   const SE3 middle = trajectory[trajectory.size() / 2].world_from_camera;
   const Eigen::Matrix3d r = middle.RotationMatrix();
   const SE3 above = ViewOfMap(with, camera, r * Eigen::Vector3d(0, 0.8, 0.6), -r.col(1));
   for (const auto& [pose, view] : {std::pair{middle, "camera"}, std::pair{above, "above"}})
-    for (const auto& [map, name] :
-         {std::pair{&with, "with_fill"}, std::pair{&without, "without_fill"}})
-      WriteImage(out->File(std::string(name) + "_" + view + ".png"),
+    for (const auto& [map, with_fill] : {std::pair{&with, true}, std::pair{&without, false}})
+      WriteImage(out->File(RunLayout::Rendering(with_fill, view)),
                  RenderSurfels(*map, camera, pose, {}).color);
 }
 
@@ -55,17 +54,12 @@ std::string CompareSummary::BriefReport() const {
 CompareSummary RunCompare(const ReconstructOptions& given) {
   ReconstructOptions options = given;
   options.pipeline.fill = options.pipeline.fusion = true;
-  std::string problem;
-  if (!options.Check(&problem)) throw InputError(options.out_dir, "bad options: " + problem);
-  std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, options.source);
-  const fs::path out(options.out_dir);
-  // One marker and lock for the whole comparison: with_fill/ and without_fill/ are recorded in it.
   RunFolder::Options folder_options;
-  folder_options.earlier = options.force ? RunFolder::kReplace : RunFolder::kRefuse;
-  folder_options.inputs = {options.input};
+  std::unique_ptr<FrameSource> source = OpenRunInput(options, &folder_options);
+  // One marker and lock for the whole comparison: with_fill/ and without_fill/ are recorded in it.
   RunFolder folder(options.out_dir, folder_options);
-  FolderRunSink with(&folder, "with_fill");
-  FolderRunSink without(&folder, "without_fill");
+  FolderRunSink with(&folder, RunLayout::kWithFill);
+  FolderRunSink without(&folder, RunLayout::kWithoutFill);
   CompareSummary summary;
   summary.run = RunPipeline(options, source.get(), &with, &without, "compare");
   json& c = summary.compare;
@@ -74,19 +68,19 @@ CompareSummary RunCompare(const ReconstructOptions& given) {
   for (const char* v : {"with_fill", "without_fill"}) {
     c[v]["surfels"] = std::string(v) == "with_fill" ? summary.run.report["surfels"]
                                                     : summary.run.report_without_fill["surfels"];
-    const json truth = EvaluateMapAgainstTruth(options.input, (out / v).string());
+    const json truth = EvaluateMapAgainstTruth(options.input, RunLayout(options.out_dir).Path(v));
     if (truth.is_null()) continue;
     c[v]["completeness"] = truth["completeness"];
     c[v]["accuracy"] = truth["accuracy"];
     c["ate_m"] = truth["ate_m"];
   }
-  WriteTextFileAtomically(folder.File("compare.json"), JsonText(c) + "\n");
+  WriteTextFileAtomically(folder.File(RunLayout::kCompare), JsonText(c) + "\n");
   WriteRenderings(&folder, source->camera(),
-                  ReadTumTrajectory((out / "with_fill/trajectory.txt").string()));
+                  ReadTumTrajectory(RunLayout(options.out_dir).Map(true).Path(RunLayout::kTrajectory)));
   HtmlReport r("GlassFusion: the model with and without the stereo fill");
   AddComparisonSections(&r, options.out_dir, "",
                         [&](const std::string& name) { return folder.File(name); });
-  WriteTextFileAtomically(folder.File("report.html"), r.Html());
+  WriteTextFileAtomically(folder.File(RunLayout::kPage), r.Html());
   return summary;
 }
 

@@ -40,7 +40,7 @@ struct BenchOptions {
   // tracked poses; next to OpenCV's StereoSGBM alone on the same rectified sideways pairs.
   int fill_every = 0;
   // Also time the surfel fusion per frame, on one core and on two, with our tracked poses, and
-  // with a map of about a million surfels (apps/bench_fusion.h).
+  // with a map of about a million surfels (runs/bench_fusion.h).
   bool fusion = false;
   // Also our tracker refined against the surfel map (frame-to-model), fused as it goes.
   bool frame_to_model = false;

@@ -1,22 +1,22 @@
-#include "apps/demo.h"
+#include "runs/demo.h"
 
 #include <filesystem>
-#include <iostream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "acquisition/run_layout.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
 #include "acquisition/json_text.h"
 #include "acquisition/run_folder.h"
 #include "acquisition/stats.h"
-#include "apps/compare.h"
-#include "apps/info.h"
-#include "apps/progress.h"
-#include "apps/reconstruct.h"
+#include "runs/compare.h"
+#include "acquisition/input_info.h"
+#include "acquisition/progress.h"
+#include "runs/reconstruct.h"
 #include "datasets/synth.h"
 #include "eval/fill_truth.h"
 #include "pipeline/settings.h"
@@ -80,8 +80,8 @@ nlohmann::ordered_json SummariseDatasets(const DemoOptions& options, std::string
   std::sort(inputs.begin(), inputs.end());
   nlohmann::ordered_json datasets = nlohmann::ordered_json::array();
   for (const std::string& input : inputs) {
-    TerminalProgress progress("demo: " + fs::path(input).filename().string(), std::nullopt);
-    datasets.push_back(InputInfo(input, {}, [&](int d, int) { progress.Update(d); }));
+    const std::unique_ptr<Progress> progress = ShowProgress("demo: " + fs::path(input).filename().string(), std::nullopt);
+    datasets.push_back(InputInfo(input, {}, [&](int d, int) { progress->Update(d); }));
   }
   return datasets;
 }
@@ -165,7 +165,7 @@ nlohmann::ordered_json FillJson(const FillScore& fill) {
 
 }  // namespace
 
-void RunDemo(const DemoOptions& options) {
+std::string RunDemo(const DemoOptions& options) {
   std::string problem;
   if (!options.Check(&problem)) throw InputError("demo", problem);
   // The reconstruction's settings first: a bad config file stops the demo before it writes.
@@ -190,9 +190,9 @@ void RunDemo(const DemoOptions& options) {
   synth_options.seed = 1;
   synth::SynthSummary synth_summary;
   {
-    TerminalProgress progress("demo: rendering glass-table", options.frames);
+    const std::unique_ptr<Progress> progress = ShowProgress("demo: rendering glass-table", options.frames);
     synth_summary = synth::GenerateDataset(synth_options, scene_dir,
-                                           [&](int done, int) { progress.Update(done); });
+                                           [&](int done, int) { progress->Update(done); });
   }
   folder.RecordTree("glass-table");  // moved into place whole (StageFolder, PublishFolder)
   RgbdFrame first;
@@ -204,7 +204,7 @@ void RunDemo(const DemoOptions& options) {
   compare.out_dir = compare_dir;
   compare.force = true;  // compare/'s own marker: only what the earlier demo's comparison wrote
   const CompareSummary c = RunCompare(compare);
-  const FillScore fill = ScoreFill(scene_dir, (out / "compare/with_fill").string());
+  const FillScore fill = ScoreFill(scene_dir, RunLayout(compare_dir).Map(true).dir());
   std::string data_dir;
   const nlohmann::ordered_json datasets = SummariseDatasets(options, &data_dir);
 
@@ -234,10 +234,10 @@ void RunDemo(const DemoOptions& options) {
   AddComparisonSections(&r, compare_dir, "compare/",
                         [&](const std::string& name) { return folder.File(name); });
   AddDatasetSection(&r, data_dir, datasets);
-  WriteTextFileAtomically(folder.File("report.json"), JsonText(report) + "\n");
-  WriteTextFileAtomically(folder.File("report.html"), r.Html());
-  std::cout << "demo: glass-table " << synth_summary.BriefReport() << "; " << c.BriefReport()
-            << "; report in " << (out / "report.html").string() << std::endl;
+  WriteTextFileAtomically(folder.File(RunLayout::kReport), JsonText(report) + "\n");
+  WriteTextFileAtomically(folder.File(RunLayout::kPage), r.Html());
+  return "glass-table " + synth_summary.BriefReport() + "; " + c.BriefReport() + "; report in " +
+         (out / RunLayout::kPage).string();
 }
 
 }  // namespace gf

@@ -1,4 +1,4 @@
-#include "apps/batch.h"
+#include "batch/batch.h"
 
 #include <fcntl.h>
 #include <spawn.h>
@@ -17,11 +17,11 @@
 #include <sstream>
 #include <thread>
 
+#include "acquisition/run_layout.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/json_text.h"
-#include "apps/interrupt.h"
-#include "apps/progress.h"
+#include "acquisition/progress.h"
 #include "acquisition/bounds.h"
 
 extern char** environ;
@@ -59,10 +59,10 @@ std::string UniqueName(const std::string& input, std::set<std::string>* taken) {
 // Whether DIR/<name> holds a complete comparison made with the same settings and input.
 bool AlreadyDone(const std::string& out_dir, const BatchCapture& c,
                  const std::string& fingerprint) {
-  const fs::path run = fs::path(out_dir) / c.name;
+  const RunLayout run((fs::path(out_dir) / c.name).string());
   const json state = ReadJsonIfAny((StateDir(out_dir) / (c.name + ".json")).string());
-  const json report = ReadJsonIfAny((run / "with_fill" / "report.json").string());
-  return IsRegularFile((run / "compare.json").string()) && state.is_object() &&
+  const json report = ReadJsonIfAny(run.Map(true).Path(RunLayout::kReport));
+  return IsRegularFile(run.Path(RunLayout::kCompare)) && state.is_object() &&
          state.value("status", "") == "done" && state.value("fingerprint", "") == fingerprint &&
          report.is_object() && report.value("complete", false);
 }
@@ -338,13 +338,13 @@ BatchSummary RunBatch(const BatchOptions& options) {
     else
       todo.push_back({captures[i], fingerprint, 0, 1, {}});
   }
-  TerminalProgress progress("batch", static_cast<int>(todo.size()));
+  const std::unique_ptr<Progress> progress = ShowProgress("batch", static_cast<int>(todo.size()));
   int finished = 0;
   RunChildren(options, out.get(), todo, [&](const Running& r, bool ok, double seconds) {
     WriteState(out.get(), r, ok, seconds);
-    progress.Update(++finished, r.capture.name + (ok ? " done" : " failed"));
+    progress->Update(++finished, r.capture.name + (ok ? " done" : " failed"));
   });
-  progress.Finish();
+  progress->Finish();
   if (options.task >= 0) {  // one Slurm task: the summary is --collect's
     BatchSummary s;
     s.captures = 1, s.skipped = skipped, s.done = finished;

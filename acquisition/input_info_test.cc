@@ -1,4 +1,4 @@
-#include "apps/info.h"
+#include "acquisition/input_info.h"
 
 #include <gtest/gtest.h>
 

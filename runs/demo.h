@@ -32,6 +32,7 @@ struct DemoOptions {
   bool Check(std::string* message = nullptr) const;
 };
 
-void RunDemo(const DemoOptions& options);
+// Returns one line for the terminal: the scene, the comparison, where the report is.
+std::string RunDemo(const DemoOptions& options);
 
 }  // namespace gf

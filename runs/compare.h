@@ -21,7 +21,7 @@
 #include <string>
 
 #include "acquisition/trajectory.h"
-#include "apps/reconstruct.h"
+#include "runs/reconstruct.h"
 
 namespace gf {
 

@@ -1,13 +1,12 @@
-#include "apps/reconstruct.h"
+#include "runs/reconstruct.h"
 
 #include <spdlog/spdlog.h>
 
-#include <charconv>
 #include <filesystem>
 
+#include "acquisition/run_layout.h"
 #include "acquisition/errors.h"
-#include "apps/interrupt.h"
-#include "apps/progress.h"
+#include "acquisition/progress.h"
 #include "pipeline/run_sink.h"
 #include "report/run_report.h"
 #include "surfels/mesh.h"
@@ -27,42 +26,6 @@ bool ReconstructOptions::Check(std::string* message) const {
   return c.ok();
 }
 
-void ParseFrameRange(const std::string& range, int* first, int* end) {
-  // An empty range, or ":" with neither end, names no frames: the whole capture is had by leaving
-  // --frames out, never by a range that says nothing.
-  if (range.empty() || range == ":")
-    throw InputError("--frames", "\"" + range + "\" names no frames: give N, A:B or A:");
-  const size_t colon = range.find(':');
-  // Whole numbers only: "1e3" must not silently read as 1.
-  auto number = [&](const std::string& text, int if_empty) {
-    if (text.empty()) return if_empty;
-    int value = 0;
-    const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-    if (ec != std::errc() || ptr != text.data() + text.size() || value < 0)
-      throw InputError("--frames", "\"" + range + "\" is not A:B with whole frame numbers");
-    return value;
-  };
-  if (colon == std::string::npos) {  // "N": the first N frames
-    *first = 0;
-    *end = number(range, -1);
-    if (*end <= 0) throw InputError("--frames", "\"" + range + "\" needs N >= 1 frames");
-    return;
-  }
-  *first = number(range.substr(0, colon), 0);
-  *end = number(range.substr(colon + 1), -1);
-  if (*end >= 0 && *end <= *first)
-    throw InputError("--frames", "\"" + range + "\" needs 0 <= A < B");
-}
-
-int FrameCountOf(const std::string& range, const std::string& command) {
-  int first = 0, end = -1;
-  ParseFrameRange(range, &first, &end);
-  if (first != 0 || end < 0)
-    throw InputError("--frames",
-                     command + " starts at frame 0: give N or 0:N, not \"" + range + "\"");
-  return end;
-}
-
 ReconstructionSummary RunPipeline(
     const ReconstructOptions& options, FrameSource* source, RunSink* sink, RunSink* without_fill,
     const std::string& label,
@@ -76,7 +39,7 @@ ReconstructionSummary RunPipeline(
   else if (fs::is_directory(options.input))
     pipeline.camera_file = (fs::path(options.input) / "camera.json").string();
   Reconstruction reconstruction(pipeline);
-  TerminalProgress progress(label, source->FrameCount());
+  const std::unique_ptr<Progress> progress = ShowProgress(label, source->FrameCount());
   ReconstructionCallbacks callbacks;
   callbacks.progress = [&](const ReconstructionProgress& p) {
     // After the last frame, what is still finishing.
@@ -91,8 +54,8 @@ ReconstructionSummary RunPipeline(
       if (pipeline.fusion) detail += " fused " + std::to_string(p.frames_fused) + " frames,";
       detail.pop_back();
     }
-    progress.SetTotal(p.total);
-    progress.Update(p.frames, detail);
+    progress->SetTotal(p.total);
+    progress->Update(p.frames, detail);
   };
   callbacks.stop = [&]() -> std::string {
     if (!options.interrupt || !*options.interrupt) return "";
@@ -100,7 +63,7 @@ ReconstructionSummary RunPipeline(
   };
   callbacks.finish = finish;
   const ReconstructionSummary s = reconstruction.Run(*source, sink, callbacks, without_fill);
-  progress.Finish();
+  progress->Finish();
   if (s.refused) throw InputError(options.input, s.stopped_because);
   if (!s.complete)
     throw Interrupted(options.interrupt ? options.interrupt->load() : 0,
@@ -110,21 +73,27 @@ ReconstructionSummary RunPipeline(
   return s;
 }
 
-ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
+std::unique_ptr<FrameSource> OpenRunInput(const ReconstructOptions& options,
+                                          RunFolder::Options* folder) {
   std::string problem;
   if (!options.Check(&problem)) throw InputError(options.out_dir, "bad options: " + problem);
-  // The input first: a bad input leaves no run folder behind.
   std::unique_ptr<FrameSource> source = OpenFrameSource(options.input, options.source);
+  folder->earlier = options.force ? RunFolder::kReplace : RunFolder::kRefuse;
+  folder->inputs = {options.input};
+  return source;
+}
+
+ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
   RunFolder::Options folder;
-  folder.earlier = options.force ? RunFolder::kReplace : RunFolder::kRefuse;
-  folder.inputs = {options.input};
+  std::unique_ptr<FrameSource> source = OpenRunInput(options, &folder);
   FolderRunSink sink(options.out_dir, folder);
   // Before the final report.json: the mesh and the page (a failure of either is a warning in it).
   auto finish = [&](const nlohmann::ordered_json& report) {
     if (options.mesh && options.pipeline.fusion) {
       try {
         const MeshSummary m = WriteMapMesh(
-            ReadSurfelPly((fs::path(options.out_dir) / "map.ply").string()), sink.File("mesh.ply"),
+            ReadSurfelPly(RunLayout(options.out_dir).Path(RunLayout::kMap)),
+            sink.File(RunLayout::kMesh),
             {});
         spdlog::info("{}", m.BriefReport());
       } catch (const std::exception& e) {
@@ -132,7 +101,7 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
       }
     }
     try {
-      sink.File("report.html");
+      sink.File(RunLayout::kPage);
       WriteRunReport(options.out_dir, options.input, report,
                      [&](const std::string& name) { return sink.File(name); });
     } catch (const std::exception& e) {

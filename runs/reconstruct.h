@@ -15,10 +15,12 @@
 
 #include <atomic>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "acquisition/frame_source.h"
+#include "acquisition/run_folder.h"
 #include "pipeline/reconstruction.h"
 #include "pipeline/run_sink.h"
 
@@ -38,14 +40,12 @@ struct ReconstructOptions {
   bool Check(std::string* message = nullptr) const;
 };
 
-// --frames, the same in every command: "A:B" frames A to B-1, "A:" from A, ":B" or "B" the first
-// B (whole non-negative numbers). Throws InputError for anything else ("", ":", "1e3:2000", "5:3",
-// "a:b"): the whole capture is had by leaving --frames out.
-void ParseFrameRange(const std::string& range, int* first, int* end);
-// --frames of a command that makes frames from 0 (synth, capture, demo): "N" or "0:N" -> N.
-int FrameCountOf(const std::string& range, const std::string& command);
-
 ReconstructionSummary RunReconstruct(const ReconstructOptions& options);
+
+// Checks `options` and opens the input, before any run folder (a bad input leaves none behind);
+// *folder gets the run folder's options (--force, the input it must not hold). Throws InputError.
+std::unique_ptr<FrameSource> OpenRunInput(const ReconstructOptions& options,
+                                          RunFolder::Options* folder);
 
 // The pipeline over `source` (opened from options.input) into `sink` (and `without_fill`, may be
 // null: see Reconstruction::Run), with terminal progress labelled `label` and Ctrl-C; `finish`

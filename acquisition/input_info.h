@@ -1,5 +1,5 @@
-// `glassfusion info INPUT`: what an input holds, as JSON (DESIGN.md: source kind, frames, size,
-// intrinsics, depth convention, hole fraction). Reads every depth frame to measure holes.
+// What an input holds, as JSON (`glassfusion info INPUT` prints it; DESIGN.md: source kind,
+// frames, size, intrinsics, depth convention, hole fraction). Reads every depth frame for holes.
 #pragma once
 
 #include <functional>

@@ -1,4 +1,4 @@
-#include "apps/bench.h"
+#include "runs/bench.h"
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -18,13 +18,14 @@
 #include <optional>
 #include <thread>
 
+#include "acquisition/run_layout.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
-#include "apps/bench_fusion.h"
-#include "apps/progress.h"
+#include "runs/bench_fusion.h"
+#include "acquisition/progress.h"
 #include "pipeline/settings.h"
 #include "pipeline/timing.h"
 #include "registration/tracker.h"
@@ -125,11 +126,11 @@ nlohmann::ordered_json BenchStereoFill(const std::vector<RgbdFrame>& frames,
   };
   const int keyframes =
       (static_cast<int>(frames.size()) + options.fill_every - 1) / options.fill_every;
-  TerminalProgress progress("bench: stereo fill", keyframes);
+  const std::unique_ptr<Progress> progress = ShowProgress("bench: stereo fill", keyframes);
   for (int i = 0, k = 0; i < static_cast<int>(frames.size()); i += options.fill_every, ++k) {
     for (const FilledKeyframe& f : filler.Add(frames[i], tracked[i].world_from_camera)) process(f);
     pair_ms.push_back(filler.last_pairing_ms());
-    progress.Update(k + 1);
+    progress->Update(k + 1);
   }
   for (const FilledKeyframe& f : filler.Flush()) process(f);
   cv::setNumThreads(threads);
@@ -159,14 +160,14 @@ MethodResult TrackFrames(const std::vector<RgbdFrame>& frames, const Camera& cam
                          const BenchOptions& options) {
   MethodResult ours{"glassfusion frame-to-keyframe ICP", {}, {}, 0};
   FrameToKeyframeTracker tracker(camera, options.pipeline.tracker);
-  TerminalProgress progress("bench: glassfusion", static_cast<int>(frames.size()));
+  const std::unique_ptr<Progress> progress = ShowProgress("bench: glassfusion", static_cast<int>(frames.size()));
   for (const RgbdFrame& f : frames) {
     const auto t0 = Clock::now();
     const TrackingResult r = tracker.Track(f);
     ours.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     ours.failures += !r.has_pose();
     if (r.has_pose()) ours.trajectory.push_back({f.timestamp, f.timestamp_text, r.world_from_camera});
-    progress.Update(static_cast<int>(ours.ms.size()));
+    progress->Update(static_cast<int>(ours.ms.size()));
   }
   return ours;
 }
@@ -178,7 +179,7 @@ MethodResult TrackFramesToModel(const std::vector<RgbdFrame>& frames, const Came
   MethodResult model{"glassfusion frame-to-model ICP (+ fusion)", {}, {}, 0};
   FrameToKeyframeTracker tracker(camera, options.pipeline.tracker);
   SurfelFusion fusion(camera, options.pipeline.fusion_options.fusion);
-  TerminalProgress progress("bench: glassfusion frame-to-model", static_cast<int>(frames.size()));
+  const std::unique_ptr<Progress> progress = ShowProgress("bench: glassfusion frame-to-model", static_cast<int>(frames.size()));
   SE3 last;
   for (size_t i = 0; i < frames.size(); ++i) {
     const auto t0 = Clock::now();
@@ -191,7 +192,7 @@ MethodResult TrackFramesToModel(const std::vector<RgbdFrame>& frames, const Came
     }
     model.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     model.failures += !r.has_pose();
-    progress.Update(static_cast<int>(i + 1));
+    progress->Update(static_cast<int>(i + 1));
   }
   return model;
 }
@@ -220,20 +221,20 @@ nlohmann::ordered_json BenchPipeline(const std::vector<RgbdFrame>& frames,
     on_disk = std::make_unique<FolderRunSink>(folder, RunFolder::Options{});
   }
   RunSink& sink = on_disk ? static_cast<RunSink&>(*on_disk) : in_memory;
-  TerminalProgress progress("bench: " + name, static_cast<int>(frames.size()));
+  const std::unique_ptr<Progress> progress = ShowProgress("bench: " + name, static_cast<int>(frames.size()));
   const double before_mib = ResidentMiB();
   double peak_mib = before_mib;
   ReconstructionCallbacks callbacks;
   callbacks.progress = [&](const ReconstructionProgress& p) {
     peak_mib = std::max(peak_mib, ResidentMiB());
-    progress.Update(p.frames);
+    progress->Update(p.frames);
   };
   const ReconstructionSummary s = Reconstruction(pipeline).Run(source, &sink, callbacks);
   if (peak_added_mib) *peak_added_mib = std::max(peak_mib, ResidentMiB()) - before_mib;
   result->name = name;
   if (on_disk) {
     on_disk.reset();
-    result->trajectory = ReadTumTrajectory(folder + "/trajectory.txt");
+    result->trajectory = ReadTumTrajectory(RunLayout(folder).Path(RunLayout::kTrajectory));
     std::error_code ignored;
     std::filesystem::remove_all(folder, ignored);  // the folder this call made
   } else {
@@ -300,7 +301,7 @@ std::vector<MethodResult> RunOdometryPeers(const std::vector<RgbdFrame>& frames,
   }
   for (auto& [name, odometry] : peers) {
     MethodResult m{name, {}, {}, 0};
-    TerminalProgress progress("bench: " + name, static_cast<int>(frames.size()));
+    const std::unique_ptr<Progress> progress = ShowProgress("bench: " + name, static_cast<int>(frames.size()));
     SE3 world_from_current;
     m.trajectory.push_back({frames[0].timestamp, frames[0].timestamp_text, world_from_current});
     for (size_t i = 1; i < frames.size(); ++i) {
@@ -320,7 +321,7 @@ std::vector<MethodResult> RunOdometryPeers(const std::vector<RgbdFrame>& frames,
         ++m.failures;
       }
       m.trajectory.push_back({frames[i].timestamp, frames[i].timestamp_text, world_from_current});
-      progress.Update(static_cast<int>(i + 1));
+      progress->Update(static_cast<int>(i + 1));
     }
     results.push_back(std::move(m));
   }
@@ -352,12 +353,12 @@ nlohmann::ordered_json RunBench(const BenchOptions& options) {
 
   std::vector<RgbdFrame> frames;
   {
-    TerminalProgress progress("bench: loading", source->FrameCount());
+    const std::unique_ptr<Progress> progress = ShowProgress("bench: loading", source->FrameCount());
     RgbdFrame f;
     for (int index = 0; (options.end_frame < 0 || index < options.end_frame) && source->Next(&f);
          ++index) {
       if (index >= options.first_frame) frames.push_back(f);
-      progress.Update(index + 1);
+      progress->Update(index + 1);
     }
   }
   if (frames.size() < 2) throw InputError(options.input, "bench needs at least 2 frames");

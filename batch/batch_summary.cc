@@ -2,11 +2,12 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "acquisition/run_layout.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
-#include "apps/batch.h"
+#include "batch/batch.h"
 #include "report/report_html.h"
 
 namespace fs = std::filesystem;
@@ -29,15 +30,15 @@ std::string Fixed(double value, int digits) {
 }
 
 // ATE from compare.json (synthetic ground truth) or from the ground truth beside the input.
-std::string Ate(const json& compare, const std::string& input, const fs::path& run) {
+std::string Ate(const json& compare, const std::string& input, const RunLayout& run) {
   if (compare.contains("ate_m") && compare["ate_m"].is_number())
     return Fixed(compare["ate_m"].get<double>(), 4);
   const std::string truth = GroundTruthBeside(input);
-  const fs::path estimate = run / "with_fill" / "trajectory.txt";
-  if (truth.empty() || !IsRegularFile(estimate.string())) return "";
+  const std::string estimate = run.Map(true).Path(RunLayout::kTrajectory);
+  if (truth.empty() || !IsRegularFile(estimate)) return "";
   try {
     const TrajectoryErrorSummary ate =
-        EvaluateTrajectory(ReadTrajectory(truth), ReadTumTrajectory(estimate.string()));
+        EvaluateTrajectory(ReadTrajectory(truth), ReadTumTrajectory(estimate));
     return ate.success ? Fixed(ate.ate_rmse_m, 4) : "";
   } catch (const std::exception&) {
     return "";
@@ -47,13 +48,13 @@ std::string Ate(const json& compare, const std::string& input, const fs::path& r
 Row MakeRow(const std::string& out_dir, const json& capture) {
   Row row;
   row.name = capture["name"];
-  const fs::path run = fs::path(out_dir) / row.name;
+  const RunLayout run((fs::path(out_dir) / row.name).string());
   const json state = ReadJsonIfAny((fs::path(out_dir) / "batch" / (row.name + ".json")).string());
   row.status = state.is_object() ? state.value("status", "pending") : "pending";
   if (state.is_object()) row.seconds = Fixed(state.value("seconds", 0.0), 1);
   if (row.status == "failed") row.error = state["error"].is_string() ? state["error"] : "";
-  const json compare = ReadJsonIfAny((run / "compare.json").string());
-  const json report = ReadJsonIfAny((run / "with_fill" / "report.json").string());
+  const json compare = ReadJsonIfAny(run.Path(RunLayout::kCompare));
+  const json report = ReadJsonIfAny(run.Map(true).Path(RunLayout::kReport));
   if (row.status != "done" || !compare.is_object() || !report.is_object()) return row;
   row.frames = std::to_string(compare.value("frames", 0));
   row.ate_m = Ate(compare, capture["input"], run);

@@ -1,9 +1,38 @@
-#include "apps/info.h"
+#include "acquisition/input_info.h"
 
 #include "acquisition/depth.h"
 #include "acquisition/stats.h"
 
 namespace gf {
+namespace {
+
+// The camera's size and intrinsics.
+void AddCamera(const Camera& c, nlohmann::ordered_json* j) {
+  (*j)["width"] = c.width;
+  (*j)["height"] = c.height;
+  (*j)["intrinsics"] = {{"fx", c.fx},
+                        {"fy", c.fy},
+                        {"cx", c.cx},
+                        {"cy", c.cy},
+                        {"distortion", c.DistortionCoefficients()}};
+}
+
+// Where the reader registered depth to colour: the depth camera and where it sits.
+void AddDepthCamera(const CameraFile& cf, nlohmann::ordered_json* j) {
+  if (!cf.depth_camera) return;
+  const Camera& d = *cf.depth_camera;
+  const Eigen::Vector3d t = cf.color_from_depth.translation();
+  (*j)["depth_camera"] = {{"width", d.width}, {"height", d.height}, {"fx", d.fx},
+                          {"fy", d.fy},       {"cx", d.cx},         {"cy", d.cy},
+                          {"distortion", d.DistortionCoefficients()}};
+  (*j)["color_from_depth"] = {
+      {"translation_m", {t.x(), t.y(), t.z()}},
+      {"rotation_deg",
+       cf.color_from_depth.rotation().angularDistance(Eigen::Quaterniond::Identity()) * 180 /
+           M_PI}};
+}
+
+}  // namespace
 
 nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions options,
                                  const std::function<void(int, int)>& progress) {
@@ -11,7 +40,6 @@ nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions op
       false;  // holes are a property of depth; colour decoding would double the time
   std::unique_ptr<FrameSource> source = OpenFrameSource(input, options);
   const CameraFile& cf = source->camera_file();
-  const Camera& c = cf.camera;
   const int total = source->FrameCount().value_or(0);
 
   HoleStats holes;
@@ -44,28 +72,11 @@ nlohmann::ordered_json InputInfo(const std::string& input, FrameSourceOptions op
   if (source->Kind() == "tum" || source->Kind() == "realsense_bag" ||
       source->Kind() == "azure_kinect_mkv")
     j["duration_s"] = last_time - first_time;
-  j["width"] = c.width;
-  j["height"] = c.height;
-  j["intrinsics"] = {{"fx", c.fx},
-                     {"fy", c.fy},
-                     {"cx", c.cx},
-                     {"cy", c.cy},
-                     {"distortion", c.DistortionCoefficients()}};
+  AddCamera(cf.camera, &j);
   j["depth_convention"] = source->depth_convention().Name();
   j["depth_scale"] = cf.depth_scale;
   j["depth_registered_to_color"] = cf.depth_registered_to_color;
-  if (cf.depth_camera) {
-    // Depth registered to colour by the reader: the depth camera and where it sits.
-    const Camera& d = *cf.depth_camera;
-    const Eigen::Vector3d t = cf.color_from_depth.translation();
-    j["depth_camera"] = {{"width", d.width}, {"height", d.height}, {"fx", d.fx}, {"fy", d.fy},
-                         {"cx", d.cx},       {"cy", d.cy},       {"distortion", d.DistortionCoefficients()}};
-    j["color_from_depth"] = {
-        {"translation_m", {t.x(), t.y(), t.z()}},
-        {"rotation_deg",
-         cf.color_from_depth.rotation().angularDistance(Eigen::Quaterniond::Identity()) * 180 /
-             M_PI}};
-  }
+  AddDepthCamera(cf, &j);
   const double pixels = static_cast<double>(holes.pixels);
   j["hole_fraction"] = holes.Fraction();
   j["holes"] = {{"no_return", pixels ? holes.no_return / pixels : 0.0},

@@ -1,9 +1,9 @@
-#include "apps/bench_fusion.h"
+#include "runs/bench_fusion.h"
 
 #include <algorithm>
 #include <opencv2/core/utility.hpp>
 
-#include "apps/progress.h"
+#include "acquisition/progress.h"
 #include "pipeline/timing.h"
 
 namespace gf {
@@ -13,7 +13,7 @@ using json = nlohmann::ordered_json;
 
 // Fuses every frame into `fusion` with `threads` threads; the milliseconds of each.
 std::vector<double> FuseAll(const std::vector<RgbdFrame>& frames, const Trajectory& tracked,
-                            int threads, SurfelFusion* fusion, TerminalProgress* progress) {
+                            int threads, SurfelFusion* fusion, Progress* progress) {
   cv::setNumThreads(threads);
   std::vector<double> ms;
   for (size_t i = 0; i < frames.size(); ++i) {
@@ -34,10 +34,10 @@ json BenchFusion(const std::vector<RgbdFrame>& frames, const Trajectory& tracked
   std::vector<Surfel> built;
   for (int t : {1, 2}) {
     SurfelFusion fusion(camera, options);
-    TerminalProgress progress("bench: fusion, " + std::to_string(t) + " thread(s)",
+    const std::unique_ptr<Progress> progress = ShowProgress("bench: fusion, " + std::to_string(t) + " thread(s)",
                               static_cast<int>(frames.size()));
     out["map"]["threads_" + std::to_string(t)] =
-        TimingJson(FuseAll(frames, tracked, t, &fusion, &progress));
+        TimingJson(FuseAll(frames, tracked, t, &fusion, progress.get()));
     out["map"]["surfels"] = fusion.map().live();
     out["map"]["stable_surfels"] = fusion.Counts().total_stable();
     out["map"]["memory_bytes"] = fusion.MemoryBytes();
@@ -55,9 +55,9 @@ json BenchFusion(const std::vector<RgbdFrame>& frames, const Trajectory& tracked
     for (int t : {1, 2}) {
       SurfelFusion fusion(camera, options);
       fusion.AddSurfels(copies);
-      TerminalProgress progress("bench: fusion, large map, " + std::to_string(t) + " thread(s)",
+      const std::unique_ptr<Progress> progress = ShowProgress("bench: fusion, large map, " + std::to_string(t) + " thread(s)",
                                 static_cast<int>(frames.size()));
-      const std::vector<double> ms = FuseAll(frames, tracked, t, &fusion, &progress);
+      const std::vector<double> ms = FuseAll(frames, tracked, t, &fusion, progress.get());
       out["large_map"]["threads_" + std::to_string(t)] = TimingJson(ms);
       out["large_map"]["surfels"] = fusion.map().live();
       out["large_map"]["memory_bytes"] = fusion.MemoryBytes();
