@@ -70,6 +70,57 @@ TEST(Config, ARunsSettingsReadBackGiveTheSameSettings) {
   EXPECT_EQ(SettingsToJson(read), SettingsToJson(changed));
 }
 
+// Every setting in the tree, changed on its own to another value its check accepts, is read
+// back by --config (ApplyConfig) and written again by --print-config (SettingsToJson) as given:
+// no setting is written without being read, or read into another field.
+TEST(Config, EverySettingRoundTripsOnItsOwn) {
+  const nlohmann::json defaults = nlohmann::json::parse(SettingsToJson({}).dump());
+  const nlohmann::json leaves = defaults.flatten();  // {"/tracker/pyramid_levels": 3, ...}
+  int settings = 0;
+  for (const auto& leaf : leaves.items()) {
+    const nlohmann::json::json_pointer place(leaf.key());
+    const nlohmann::json& value = leaf.value();
+    // Candidate changes, tried in turn until one is accepted.
+    std::vector<nlohmann::json> changes;
+    if (value.is_boolean()) {
+      changes = {!value.get<bool>()};
+    } else if (value.is_number_integer()) {
+      const long v = value.get<long>();
+      changes = {v + 2, v + 1, v - 1, v * 2};
+    } else if (value.is_number()) {
+      // Powers of two and their multiples: exact in a float field too.
+      const double v = value.get<double>();
+      changes = {v * 2, v * 0.5, 0.5, 1.0, 2.0, 0.25};
+    } else if (value.is_string()) {
+      changes = {"bottom_to_top", "top_to_bottom"};
+    }
+    SCOPED_TRACE(leaf.key());
+    ASSERT_FALSE(changes.empty()) << "a setting of an unexpected kind: " << value;
+    bool round_trips = false;
+    for (const nlohmann::json& change : changes) {
+      if (change == value) continue;
+      nlohmann::json expected = defaults;
+      expected[place] = change;
+      // An element of a list is given as the whole list (a file replaces lists whole).
+      const nlohmann::json::json_pointer given_place =
+          defaults[place.parent_pointer()].is_array() ? place.parent_pointer() : place;
+      nlohmann::json given = nlohmann::json::object();
+      given[given_place] = expected[given_place];
+      ReconstructionOptions read;
+      if (!Problem(given.dump(), &read).empty()) continue;  // outside its bounds: the next one
+      // Empty when the tree read back is the one given; else the JSON Patch from one to the other.
+      const nlohmann::json difference =
+          nlohmann::json::diff(expected, nlohmann::json::parse(SettingsToJson(read).dump()));
+      EXPECT_TRUE(difference.empty()) << difference.dump();
+      round_trips = true;
+      break;
+    }
+    EXPECT_TRUE(round_trips) << "no change of " << value << " was accepted";
+    ++settings;
+  }
+  EXPECT_GT(settings, 100);
+}
+
 TEST(Config, RefusesBadFilesAndLeavesTheOptionsAlone) {
   ReconstructionOptions options;
   const auto before = SettingsToJson(options);
