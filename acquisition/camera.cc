@@ -13,6 +13,7 @@
 #include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "acquisition/names.h"
 
 namespace gf {
 
@@ -318,19 +319,10 @@ constexpr std::pair<const char*, ReadoutOrder> kReadoutOrders[] = {
 }  // namespace
 
 bool ParseReadoutOrder(const std::string& text, ReadoutOrder* order) {
-  for (const auto& [name, value] : kReadoutOrders)
-    if (text == name) {
-      *order = value;
-      return true;
-    }
-  return false;
+  return ValueOfName(kReadoutOrders, text, order);
 }
 
-const char* ReadoutOrderName(ReadoutOrder order) {
-  for (const auto& [name, value] : kReadoutOrders)
-    if (order == value) return name;
-  return "top_to_bottom";  // (every value is listed)
-}
+const char* ReadoutOrderName(ReadoutOrder order) { return NameOfValue(kReadoutOrders, order); }
 
 CameraFile LoadCameraFile(const std::string& path) {
   const std::string text = ReadTextFile(path);

@@ -106,15 +106,19 @@ void AddSynthCommand(CLI::App& app) {
   cmd->add_option("--frames", *frames, "frames to render: N (or 0:N)")->capture_default_str();
   cmd->add_option("--seed", options->seed, "textures, trajectory and noise")->capture_default_str();
   cmd->add_flag("--loop", options->loop, "trajectory comes back to its start");
-  cmd->add_option("--motion", options->motion,
+  auto motion = std::make_shared<std::string>(synth::MotionName(options->motion));
+  cmd->add_option("--motion", *motion,
                   "orbit (sideways), vertical, diagonal or forward, looking at the scene")
       ->capture_default_str();
   cmd->add_option("--degrees-per-frame", options->degrees_per_frame,
                   "speed: this arc of the orbit per frame (0.6: about 1.6 cm, 0.48 m/s)")
       ->capture_default_str();
   cmd->add_option("--out", *out, "folder to create")->required();
-  cmd->callback([options, out, frames] {
+  cmd->callback([options, out, frames, motion] {
     options->frames = FrameCountOf(*frames, "synth");
+    if (!synth::ParseMotion(*motion, &options->motion))
+      throw InputError("--motion",
+                       "\"" + *motion + "\" is not orbit, vertical, diagonal or forward");
     TerminalProgress progress("synth", options->frames);
     const synth::SynthSummary s =
         synth::GenerateDataset(*options, *out, [&](int done, int) { progress.Update(done); });

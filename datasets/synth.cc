@@ -12,14 +12,15 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "acquisition/bounds.h"
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/frame_sink.h"
 #include "acquisition/image_io.h"
 #include "acquisition/json_text.h"
+#include "acquisition/names.h"
 #include "acquisition/trajectory.h"
-#include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;
 
@@ -52,16 +53,24 @@ cv::Mat MetresToPng(const cv::Mat& metres) {
 
 }  // namespace
 
+namespace {
+constexpr std::pair<const char*, Motion> kMotions[] = {{"orbit", Motion::kOrbit},
+                                                       {"vertical", Motion::kVertical},
+                                                       {"diagonal", Motion::kDiagonal},
+                                                       {"forward", Motion::kForward}};
+}  // namespace
+
+bool ParseMotion(const std::string& text, Motion* motion) {
+  return ValueOfName(kMotions, text, motion);
+}
+
+const char* MotionName(Motion motion) { return NameOfValue(kMotions, motion); }
+
 bool SynthOptions::Check(std::string* message) const {
   const auto names = Scene::Names();
   if (std::find(names.begin(), names.end(), scene) == names.end()) {
     if (message)
       *message = "unknown scene \"" + scene + "\" (known: glass-table, shelf, window, bottles)";
-    return false;
-  }
-  if (motion != "orbit" && motion != "vertical" && motion != "diagonal" && motion != "forward") {
-    if (message)
-      *message = "unknown motion \"" + motion + "\" (orbit, vertical, diagonal, forward)";
     return false;
   }
   // A rendered capture is held in memory: at most 100,000 frames.
@@ -106,7 +115,8 @@ std::vector<SE3> MakeTrajectory(const Scene& scene, const SynthOptions& options)
     return options.loop ? step_m * n / (2 * M_PI) * std::sin(2 * M_PI * i / n)
                         : (i - (n - 1) / 2.0) * step_m;
   };
-  const bool orbit = options.motion == "orbit", diagonal = options.motion == "diagonal";
+  const bool orbit = options.motion == Motion::kOrbit,
+             diagonal = options.motion == Motion::kDiagonal;
   for (int i = 0; i < n; ++i) {
     double angle = scene.orbit_center_angle(), height = scene.eye_height();
     const double radius = scene.orbit_radius();
@@ -115,11 +125,11 @@ std::vector<SE3> MakeTrajectory(const Scene& scene, const SynthOptions& options)
     } else if (orbit || diagonal) {
       angle += travel(i) / (diagonal ? std::sqrt(2.0) : 1.0) / radius;
     }
-    if (options.motion == "vertical") height += travel(i);
+    if (options.motion == Motion::kVertical) height += travel(i);
     if (diagonal) height += travel(i) / std::sqrt(2.0);
     Eigen::Vector3d offset(radius * std::cos(angle), radius * std::sin(angle),
                            height - scene.focus().z());
-    if (options.motion == "forward")  // along the line of sight, never nearer than 0.6 m
+    if (options.motion == Motion::kForward)  // along the line of sight, never nearer than 0.6 m
       offset *= std::max(0.6 / offset.norm(), 1.0 - travel(i) / offset.norm());
     const Eigen::Vector3d eye =
         scene.focus() + offset +

@@ -86,15 +86,24 @@ struct KinectModelOptions {
   static KinectModelOptions ClearGlassAsHoles();
 };
 
+// How the camera moves, always looking at the scene's focus.
+enum class Motion {
+  kOrbit,     // sideways around it
+  kVertical,  // up, or up and down when looping
+  kDiagonal,  // both at once
+  kForward,   // towards it
+};
+// "orbit", "vertical", "diagonal", "forward"; false for anything else.
+bool ParseMotion(const std::string& text, Motion* motion);
+const char* MotionName(Motion motion);
+
 struct SynthOptions {
   std::string scene = "glass-table";  // Scene::Names()
   int frames = 60;                    // frames to render
   uint32_t seed = 1;                  // scene textures, trajectory jitter and sensor noise
   bool loop = false;                  // the trajectory comes back to its start
-  // How the camera moves, always looking at the scene's focus: "orbit" (sideways around it),
-  // "vertical" (up, or up and down when looping), "diagonal" (both at once), "forward" (towards
-  // it). Every motion covers the same distance per frame.
-  std::string motion = "orbit";
+  // How the camera moves; every motion covers the same distance per frame.
+  Motion motion = Motion::kOrbit;
   double fps = 30.0;               // timestamps step, frames per second
   double degrees_per_frame = 0.6;  // speed: this arc of the orbit per frame (about 1.6 cm)
   double jitter_m = 0.015;         // handheld wobble of the camera position, metres

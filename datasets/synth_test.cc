@@ -396,7 +396,8 @@ TEST(Trajectory, EachMotionMovesTheCameraAlongItsAxis) {
     SynthOptions options;
     options.frames = 30;
     options.jitter_m = 0;
-    options.motion = motion;
+    EXPECT_TRUE(ParseMotion(motion, &options.motion)) << motion;
+    EXPECT_EQ(MotionName(options.motion), motion);
     const std::vector<SE3> poses = MakeTrajectory(scene, options);
     const SE3& a = poses[14];
     const Eigen::Vector3d step =
@@ -409,9 +410,8 @@ TEST(Trajectory, EachMotionMovesTheCameraAlongItsAxis) {
   EXPECT_GT(share("forward").z(), 0.99);
   const Eigen::Vector3d diagonal = share("diagonal");
   EXPECT_NEAR(diagonal.x(), diagonal.y(), 0.15);
-  SynthOptions bad;
-  bad.motion = "sideways";
-  EXPECT_FALSE(bad.Check());
+  Motion bad;
+  EXPECT_FALSE(ParseMotion("sideways", &bad));
 }
 
 std::map<std::string, std::string> ReadAll(const std::string& dir) {
