@@ -1,6 +1,7 @@
 // FolderRunSink's run folder: --force (replace) removes only what an earlier run wrote, never a
 // folder that holds no run (a capture has a camera.json too), and a second sink into a folder a
-// live sink is writing is refused at once. CompleteFromModel: what the map may complete.
+// live sink is writing is refused at once. RunReader reads back what it wrote. CompleteFromModel:
+// what the map may complete.
 #include "pipeline/run_sink.h"
 
 #include <gtest/gtest.h>
@@ -12,6 +13,7 @@
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "pipeline/run_reader.h"
 #include "tests/testing.h"
 
 namespace gf {
@@ -42,6 +44,37 @@ std::string Refusal(const std::string& dir, bool replace) {
 }
 
 // A capture (camera.json, depth.txt, frames, the user's notes): --force must not touch it.
+// What the folder sink writes, the reader reads back through the same names.
+TEST(RunReader, ReadsBackWhatTheFolderSinkWrote) {
+  testing::TempDir dir;
+  const std::string run = dir / "run";
+  {
+    FolderRunSink sink(run, false);
+    CameraFile camera;
+    camera.camera = testing::PinholeCamera(64, 48, 50);
+    sink.WriteCamera(camera);
+    sink.WriteTrajectory({{1.5, "1.500000", SE3(Eigen::Matrix3d::Identity(), {0.1, 0.2, 0.3})}});
+    Surfel s{};
+    s.position = {1, 2, 3};
+    s.normal = {0, 0, -1};
+    s.radius = 0.01f;
+    s.confidence = 5;
+    sink.WriteMap({s, s});
+    sink.WriteReport({{"complete", true}, {"frames", 1}});
+  }
+  const RunReader reader(run);
+  EXPECT_EQ(reader.Report()["frames"], 1);
+  ASSERT_EQ(reader.Poses().size(), 1u);
+  EXPECT_EQ(reader.Poses()[0].timestamp_text, "1.500000");
+  EXPECT_NEAR(reader.Poses()[0].world_from_camera.translation().z(), 0.3, 1e-9);
+  EXPECT_EQ(reader.ImageCamera().width, 64);
+  ASSERT_EQ(reader.Map().size(), 2u);
+  EXPECT_FLOAT_EQ(reader.Map()[1].position.y(), 2.0f);
+  EXPECT_TRUE(reader.Has(RunLayout::kMap));
+  EXPECT_FALSE(reader.Has(RunLayout::kMesh));  // written only with --mesh
+  EXPECT_THROW(RunReader(dir / "none").Report(), InputError);
+}
+
 TEST(FolderRunSink, ForceNeverEmptiesACapture) {
   testing::TempDir dir;
   const std::string cap = dir / "cap";

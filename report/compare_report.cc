@@ -1,3 +1,4 @@
+#include "pipeline/run_reader.h"
 #include "report/compare_report.h"
 
 #include <cmath>
@@ -33,7 +34,7 @@ std::vector<std::pair<std::string, std::string>> Renderings(const std::string& o
   for (const std::string view : {"camera", "above"})
     for (const bool with_fill : {true, false}) {
       const std::string file = RunLayout::Rendering(with_fill, view);
-      if (!IsRegularFile(RunLayout(out_dir).Path(file))) continue;
+      if (!RunReader(out_dir).Has(file)) continue;
       images.push_back(
           {prefix + file, std::string(with_fill ? "with" : "without") +
                               " the fill, seen from " +
@@ -59,9 +60,9 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
                            const ReportFile& file) {
   const RunLayout folder(out_dir), with_fill = folder.Map(true), without_fill = folder.Map(false);
   const json c = json::parse(ReadTextFile(folder.Path(RunLayout::kCompare)));
-  const json run = json::parse(ReadTextFile(with_fill.Path(RunLayout::kReport)));
+  const json run = RunReader(with_fill.dir()).Report();
   const std::string input = c["input"];
-  const Trajectory estimate = ReadTumTrajectory(with_fill.Path(RunLayout::kTrajectory));
+  const Trajectory estimate = RunReader(with_fill.dir()).Poses();
   const std::string truth_file = GroundTruthBeside(input);
   const Trajectory truth = truth_file.empty() ? Trajectory() : ReadTrajectory(truth_file);
   const double ate = c.value("ate_m", 0.0);

@@ -1,3 +1,4 @@
+#include "pipeline/run_reader.h"
 #include "report/map_view.h"
 
 #include <algorithm>
@@ -71,8 +72,9 @@ json Base64Chunks(const std::string& bytes) {
 }
 
 json MapJson(const ViewedMap& map) {
-  const std::string ply = RunLayout(map.run_dir).Path(RunLayout::kMap);
-  const std::vector<Surfel> surfels = IsRegularFile(ply) ? ReadSurfelPly(ply) : std::vector<Surfel>();
+  const RunReader run(map.run_dir);
+  const std::vector<Surfel> surfels =
+      run.Has(RunLayout::kMap) ? run.Map() : std::vector<Surfel>();
   const std::vector<Surfel> shown = ForThePage(surfels);
   return {{"name", map.name},
           {"surfels_total", surfels.size()},
@@ -82,8 +84,8 @@ json MapJson(const ViewedMap& map) {
 
 // The camera path, and each keyframe's pose and fill overlay (paths relative to the report).
 void AddPath(const ViewedMap& map, json* view) {
-  const std::string path = RunLayout(map.run_dir).Path(RunLayout::kTrajectory);
-  const Trajectory trajectory = IsRegularFile(path) ? ReadTumTrajectory(path) : Trajectory();
+  const RunReader run(map.run_dir);
+  const Trajectory trajectory = run.Has(RunLayout::kTrajectory) ? run.Poses() : Trajectory();
   json centres = json::array();
   for (const StampedPose& p : trajectory) {
     const Eigen::Vector3d c = p.world_from_camera.translation();
@@ -104,14 +106,13 @@ void AddPath(const ViewedMap& map, json* view) {
     for (int row = 0; row < 4; ++row)
       for (int col = 0; col < 4; ++col) pose.push_back(m(row, col));
     const std::string overlay = RunLayout::Keyframe(ts, KeyframeImage::kFillOverlay);
-    const bool has_overlay = IsRegularFile(RunLayout(map.run_dir).Path(overlay));
+    const bool has_overlay = run.Has(overlay);
     keyframes.push_back({{"label", FrameLabel(file)},
                          {"world_from_camera", pose},
                          {"overlay", has_overlay ? map.prefix + overlay : ""}});
   }
   (*view)["keyframes"] = keyframes;
-  const std::string camera_file = RunLayout(map.run_dir).Path(RunLayout::kCamera);
-  const Camera c = IsRegularFile(camera_file) ? LoadCameraFile(camera_file).camera : Camera();
+  const Camera c = run.Has(RunLayout::kCamera) ? run.ImageCamera() : Camera();
   (*view)["camera"] = {{"width", c.width}, {"height", c.height}, {"fx", c.fx},
                        {"fy", c.fy},       {"cx", c.cx},         {"cy", c.cy}};
 }

@@ -1,3 +1,4 @@
+#include "pipeline/run_reader.h"
 #include "report/run_report.h"
 
 #include <Eigen/Eigenvalues>
@@ -180,7 +181,7 @@ void AddFillOverlays(HtmlReport* r, const std::string& run_dir, const std::strin
     const std::string ts = StampOfIndexedName(file);
     if (ts.empty()) continue;  // no timestamp: keyframes/ names it by index
     const std::string overlay = RunLayout::Keyframe(ts, KeyframeImage::kFillOverlay);
-    if (IsRegularFile(RunLayout(run_dir).Path(overlay)))
+    if (RunReader(run_dir).Has(overlay))
       images.push_back({prefix + overlay, FrameLabel(file)});
   }
   if (images.empty()) return;
@@ -241,7 +242,7 @@ void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& 
 
 void WriteRunReport(const std::string& run_dir, const std::string& input, const json& report,
                     const ReportFile& file) {
-  const Trajectory estimate = ReadTumTrajectory(RunLayout(run_dir).Path(RunLayout::kTrajectory));
+  const Trajectory estimate = RunReader(run_dir).Poses();
   const std::string truth_file = GroundTruthBeside(input);
   const Trajectory truth = truth_file.empty() ? Trajectory() : ReadTrajectory(truth_file);
   const TrajectoryErrorSummary ate = EvaluateTrajectory(truth, estimate);

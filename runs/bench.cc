@@ -26,6 +26,7 @@
 #include "acquisition/trajectory_metrics.h"
 #include "runs/bench_fusion.h"
 #include "acquisition/progress.h"
+#include "pipeline/run_reader.h"
 #include "pipeline/settings.h"
 #include "pipeline/timing.h"
 #include "registration/tracker.h"
@@ -234,7 +235,7 @@ nlohmann::ordered_json BenchPipeline(const std::vector<RgbdFrame>& frames,
   result->name = name;
   if (on_disk) {
     on_disk.reset();
-    result->trajectory = ReadTumTrajectory(RunLayout(folder).Path(RunLayout::kTrajectory));
+    result->trajectory = RunReader(folder).Poses();
     std::error_code ignored;
     std::filesystem::remove_all(folder, ignored);  // the folder this call made
   } else {

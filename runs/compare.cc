@@ -13,10 +13,10 @@
 #include "acquisition/run_folder.h"
 #include "acquisition/trajectory.h"
 #include "eval/map_truth.h"
+#include "pipeline/run_reader.h"
 #include "pipeline/run_sink.h"
 #include "report/compare_report.h"
 #include "report/report_html.h"
-#include "surfels/ply.h"
 #include "surfels/render.h"
 
 namespace fs = std::filesystem;
@@ -30,8 +30,8 @@ using json = nlohmann::ordered_json;
 // from above and behind that camera. Written as DIR/<map>_<view>.png.
 void WriteRenderings(RunFolder* out, const Camera& camera, const Trajectory& trajectory) {
   const RunLayout folder(out->dir());
-  const std::vector<Surfel> with = ReadSurfelPly(folder.Map(true).Path(RunLayout::kMap));
-  const std::vector<Surfel> without = ReadSurfelPly(folder.Map(false).Path(RunLayout::kMap));
+  const std::vector<Surfel> with = RunReader(folder.Map(true).dir()).Map();
+  const std::vector<Surfel> without = RunReader(folder.Map(false).dir()).Map();
   if (trajectory.empty() || with.empty()) return;
   const SE3 middle = trajectory[trajectory.size() / 2].world_from_camera;
   const Eigen::Matrix3d r = middle.RotationMatrix();
@@ -76,7 +76,7 @@ CompareSummary RunCompare(const ReconstructOptions& given) {
   }
   WriteTextFileAtomically(folder.File(RunLayout::kCompare), JsonText(c) + "\n");
   WriteRenderings(&folder, source->camera(),
-                  ReadTumTrajectory(RunLayout(options.out_dir).Map(true).Path(RunLayout::kTrajectory)));
+                  RunReader(RunLayout(options.out_dir).Map(true).dir()).Poses());
   HtmlReport r("GlassFusion: the model with and without the stereo fill");
   AddComparisonSections(&r, options.out_dir, "",
                         [&](const std::string& name) { return folder.File(name); });

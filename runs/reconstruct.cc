@@ -7,10 +7,10 @@
 #include "acquisition/run_layout.h"
 #include "acquisition/errors.h"
 #include "acquisition/progress.h"
+#include "pipeline/run_reader.h"
 #include "pipeline/run_sink.h"
 #include "report/run_report.h"
 #include "surfels/mesh.h"
-#include "surfels/ply.h"
 #include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;
@@ -92,7 +92,7 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
     if (options.mesh && options.pipeline.fusion) {
       try {
         const MeshSummary m = WriteMapMesh(
-            ReadSurfelPly(RunLayout(options.out_dir).Path(RunLayout::kMap)),
+            RunReader(options.out_dir).Map(),
             sink.File(RunLayout::kMesh),
             {});
         spdlog::info("{}", m.BriefReport());
