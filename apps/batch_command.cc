@@ -2,9 +2,9 @@
 #include <iostream>
 
 #include "acquisition/errors.h"
-#include "batch/batch.h"
 #include "apps/commands.h"
 #include "apps/interrupt.h"
+#include "batch/batch.h"
 
 namespace gf {
 

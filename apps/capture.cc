@@ -2,12 +2,12 @@
 
 #include <iostream>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "acquisition/frame_sink.h"
 #include "acquisition/frame_source.h"
 #include "apps/interrupt.h"
 #include "apps/progress.h"
-#include "acquisition/bounds.h"
 
 namespace gf {
 

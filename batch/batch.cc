@@ -17,12 +17,12 @@
 #include <sstream>
 #include <thread>
 
-#include "acquisition/run_layout.h"
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/json_text.h"
 #include "acquisition/progress.h"
-#include "acquisition/bounds.h"
+#include "acquisition/run_layout.h"
 
 extern char** environ;
 

@@ -2,9 +2,9 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "acquisition/run_layout.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "acquisition/run_layout.h"
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
 #include "batch/batch.h"

@@ -4,11 +4,11 @@
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
-#include "acquisition/run_layout.h"
 #include "acquisition/camera.h"
 #include "acquisition/errors.h"
 #include "acquisition/frame_source.h"
 #include "acquisition/image_io.h"
+#include "acquisition/run_layout.h"
 #include "datasets/synth.h"
 
 namespace fs = std::filesystem;

@@ -5,12 +5,12 @@
 #include <sstream>
 #include <vector>
 
-#include "acquisition/run_layout.h"
 #include "acquisition/camera.h"
 #include "acquisition/depth.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
+#include "acquisition/run_layout.h"
 #include "acquisition/trajectory_metrics.h"
 #include "surfels/completeness.h"
 #include "surfels/ply.h"

@@ -9,7 +9,6 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "acquisition/run_layout.h"
 #include "acquisition/bounds.h"
 #include "acquisition/camera.h"
 #include "acquisition/errors.h"
@@ -17,6 +16,7 @@
 #include "acquisition/image_io.h"
 #include "acquisition/json_text.h"
 #include "acquisition/run_folder.h"
+#include "acquisition/run_layout.h"
 #include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
 #include "fill/colmap_io.h"

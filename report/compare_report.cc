@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
-#include "acquisition/run_layout.h"
 #include "acquisition/file_util.h"
+#include "acquisition/run_layout.h"
 #include "acquisition/trajectory.h"
 #include "pipeline/run_sink.h"
 #include "report/run_report.h"

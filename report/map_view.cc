@@ -5,10 +5,10 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "acquisition/run_layout.h"
 #include "acquisition/camera.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "acquisition/run_layout.h"
 #include "acquisition/trajectory.h"
 #include "pipeline/run_sink.h"
 #include "report/run_report.h"

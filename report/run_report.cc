@@ -6,9 +6,9 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "acquisition/run_layout.h"
 #include "acquisition/file_util.h"
 #include "acquisition/json_text.h"
+#include "acquisition/run_layout.h"
 #include "acquisition/trajectory_metrics.h"
 #include "pipeline/run_sink.h"
 

@@ -18,22 +18,22 @@
 #include <optional>
 #include <thread>
 
-#include "acquisition/run_layout.h"
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
+#include "acquisition/progress.h"
+#include "acquisition/run_layout.h"
 #include "acquisition/stats.h"
 #include "acquisition/trajectory.h"
 #include "acquisition/trajectory_metrics.h"
-#include "runs/bench_fusion.h"
-#include "acquisition/progress.h"
+#include "fill/keyframe_filler.h"
+#include "fill/stereo_fill.h"
 #include "pipeline/run_reader.h"
 #include "pipeline/settings.h"
 #include "pipeline/timing.h"
 #include "registration/tracker.h"
-#include "fill/keyframe_filler.h"
-#include "fill/stereo_fill.h"
+#include "runs/bench_fusion.h"
 #include "surfels/fusion.h"
-#include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;
 

@@ -4,13 +4,13 @@
 #include <filesystem>
 #include <utility>
 
-#include "acquisition/run_layout.h"
 #include "acquisition/camera.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
 #include "acquisition/json_text.h"
 #include "acquisition/run_folder.h"
+#include "acquisition/run_layout.h"
 #include "acquisition/trajectory.h"
 #include "eval/map_truth.h"
 #include "pipeline/run_reader.h"

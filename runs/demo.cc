@@ -6,24 +6,24 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
-#include "acquisition/run_layout.h"
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
-#include "acquisition/json_text.h"
-#include "acquisition/run_folder.h"
-#include "acquisition/stats.h"
-#include "runs/compare.h"
 #include "acquisition/input_info.h"
+#include "acquisition/json_text.h"
 #include "acquisition/progress.h"
-#include "runs/reconstruct.h"
+#include "acquisition/run_folder.h"
+#include "acquisition/run_layout.h"
+#include "acquisition/stats.h"
 #include "datasets/synth.h"
 #include "eval/fill_truth.h"
 #include "pipeline/settings.h"
 #include "report/compare_report.h"
 #include "report/report_html.h"
 #include "report/run_report.h"
-#include "acquisition/bounds.h"
+#include "runs/compare.h"
+#include "runs/reconstruct.h"
 
 namespace fs = std::filesystem;
 

@@ -4,14 +4,14 @@
 
 #include <filesystem>
 
-#include "acquisition/run_layout.h"
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "acquisition/progress.h"
+#include "acquisition/run_layout.h"
 #include "pipeline/run_reader.h"
 #include "pipeline/run_sink.h"
 #include "report/run_report.h"
 #include "surfels/mesh.h"
-#include "acquisition/bounds.h"
 
 namespace fs = std::filesystem;
 
