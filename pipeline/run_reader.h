@@ -19,6 +19,7 @@ class RunReader {
  public:
   // dir: a run folder (reconstruct's --out, or compare's with_fill/ or without_fill/).
   explicit RunReader(std::string dir) : layout_(std::move(dir)) {}
+  explicit RunReader(RunLayout layout) : layout_(std::move(layout)) {}
   const RunLayout& layout() const { return layout_; }
   const std::string& dir() const { return layout_.dir(); }
 

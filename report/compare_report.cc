@@ -60,9 +60,10 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
                            const ReportFile& file) {
   const RunLayout folder(out_dir), with_fill = folder.Map(true), without_fill = folder.Map(false);
   const json c = json::parse(ReadTextFile(folder.Path(RunLayout::kCompare)));
-  const json run = RunReader(with_fill.dir()).Report();
+  const RunReader with_fill_run(with_fill);
+  const json run = with_fill_run.Report();
   const std::string input = c["input"];
-  const Trajectory estimate = RunReader(with_fill.dir()).Poses();
+  const Trajectory estimate = with_fill_run.Poses();
   const std::string truth_file = GroundTruthBeside(input);
   const Trajectory truth = truth_file.empty() ? Trajectory() : ReadTrajectory(truth_file);
   const double ate = c.value("ate_m", 0.0);

@@ -175,13 +175,14 @@ void AddFillOverlays(HtmlReport* r, const std::string& run_dir, const std::strin
     const size_t i = count == 1 ? files.size() / 2 : k * (files.size() - 1) / (count - 1);
     if (picks.empty() || picks.back() != i) picks.push_back(i);
   }
+  const RunReader run(run_dir);
   std::vector<std::pair<std::string, std::string>> images;
   for (size_t i : picks) {
     const std::string& file = files[i];
     const std::string ts = StampOfIndexedName(file);
     if (ts.empty()) continue;  // no timestamp: keyframes/ names it by index
     const std::string overlay = RunLayout::Keyframe(ts, KeyframeImage::kFillOverlay);
-    if (RunReader(run_dir).Has(overlay))
+    if (run.Has(overlay))
       images.push_back({prefix + overlay, FrameLabel(file)});
   }
   if (images.empty()) return;

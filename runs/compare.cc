@@ -30,8 +30,8 @@ using json = nlohmann::ordered_json;
 // from above and behind that camera. Written as DIR/<map>_<view>.png.
 void WriteRenderings(RunFolder* out, const Camera& camera, const Trajectory& trajectory) {
   const RunLayout folder(out->dir());
-  const std::vector<Surfel> with = RunReader(folder.Map(true).dir()).Map();
-  const std::vector<Surfel> without = RunReader(folder.Map(false).dir()).Map();
+  const std::vector<Surfel> with = RunReader(folder.Map(true)).Map();
+  const std::vector<Surfel> without = RunReader(folder.Map(false)).Map();
   if (trajectory.empty() || with.empty()) return;
   const SE3 middle = trajectory[trajectory.size() / 2].world_from_camera;
   const Eigen::Matrix3d r = middle.RotationMatrix();
@@ -76,7 +76,7 @@ CompareSummary RunCompare(const ReconstructOptions& given) {
   }
   WriteTextFileAtomically(folder.File(RunLayout::kCompare), JsonText(c) + "\n");
   WriteRenderings(&folder, source->camera(),
-                  RunReader(RunLayout(options.out_dir).Map(true).dir()).Poses());
+                  RunReader(RunLayout(options.out_dir).Map(true)).Poses());
   HtmlReport r("GlassFusion: the model with and without the stereo fill");
   AddComparisonSections(&r, options.out_dir, "",
                         [&](const std::string& name) { return folder.File(name); });
