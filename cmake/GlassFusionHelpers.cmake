@@ -10,7 +10,9 @@
 # gf_add_test(MODULE NAME SOURCES a_test.cc ... [LIBS ...] [TIMEOUT seconds] [LABEL label])
 #   Builds a GoogleTest executable and registers its tests as MODULE/NAME so that
 #   `ctest -R MODULE/` runs one module. Each test times out after TIMEOUT seconds (900). Its ctest
-#   label is MODULE, or LABEL (`tests`: an end-to-end run, which `make sanitize` leaves out).
+#   label is MODULE, or LABEL (`tests`: an end-to-end run, which `make sanitize` leaves out: the
+#   sanitizer build does not build it). The other test executables are the dependencies of the
+#   target gf_unit_tests, which `make sanitize` builds instead of everything.
 
 function(gf_add_library NAME)
   cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
@@ -54,7 +56,13 @@ function(gf_add_test MODULE NAME)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 900)
   endif()
+  if(GF_SANITIZE AND label STREQUAL "tests")
+    return()
+  endif()
   set(target ${MODULE}_${NAME})
+  if(NOT label STREQUAL "tests")
+    set_property(GLOBAL APPEND PROPERTY GF_UNIT_TEST_TARGETS ${target})
+  endif()
   if(GF_TSAN)
     list(APPEND ARG_SOURCES "${PROJECT_SOURCE_DIR}/tests/tsan_serial_opencv.cc")
   endif()
