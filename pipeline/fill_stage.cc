@@ -8,7 +8,6 @@
 
 #include "acquisition/bounds.h"
 #include "acquisition/errors.h"
-#include "acquisition/stats.h"
 
 namespace gf {
 
@@ -185,86 +184,10 @@ std::vector<KeyframeFill> FillStage::keyframes() const {
   return done_;
 }
 
-nlohmann::ordered_json FillStage::Report() const {
+FillReport FillStage::Report() const {
   const std::vector<KeyframeFill> done = keyframes();
   // Queued but never filled (the run stopped first), and offered after the stage stopped.
-  return FillReport(done, dropped_, accepted_ - static_cast<int>(done.size()) + not_filled_);
-}
-
-nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, int dropped,
-                                  int not_filled) {
-  using json = nlohmann::ordered_json;
-  long holes = 0, filled = 0, carried = 0, corrected = 0, corroborated = 0, seen_through = 0;
-  int paired = 0, rescaled = 0, vertical = 0;
-  std::vector<double> errors, ms;
-  json list = json::array(), failed = json::array();
-  // How many pairs took which path, and why sideways pairs did not get SGBM.
-  json paths = {{"rectified_sgbm", 0},
-                {"plane_sweep_forward", 0},
-                {"plane_sweep_degenerate_rectification", 0},
-                {"plane_sweep_requested", 0},
-                {"none", 0}};
-  json refused = {{"valid_region", 0}, {"disparity_range", 0}};
-  auto name_or_null = [](const std::string& s) { return s.empty() ? json() : json(s); };
-  for (const KeyframeFill& k : keyframes) {
-    if (!k.failure.empty()) failed.push_back({{"timestamp", k.timestamp}, {"reason", k.failure}});
-    if (!k.path.empty()) paths[k.path] = paths.value(k.path, 0) + 1;
-    if (!k.sgbm_refused.empty()) refused[k.sgbm_refused] = refused.value(k.sgbm_refused, 0) + 1;
-    rescaled += k.sgbm_rescaled;
-    vertical += k.sgbm_vertical;
-    holes += k.hole_pixels;
-    filled += k.filled_pixels;
-    carried += k.carried_pixels;
-    corrected += k.corrected_pixels;
-    corroborated += k.corroborated_pixels;
-    seen_through += k.seen_through_pixels;
-    if (!k.partner.empty()) {
-      ++paired;
-      ms.push_back(k.ms);
-      if (k.filled_pixels > 0) errors.push_back(k.stereo_error_median_m);
-    }
-    list.push_back({{"timestamp", k.timestamp},
-                    {"partner", name_or_null(k.partner)},
-                    {"baseline_m", k.baseline_m},
-                    {"matches", k.matches},
-                    {"third", name_or_null(k.third)},
-                    {"third_view", k.third_view},
-                    {"method", k.method},
-                    {"path", name_or_null(k.path)},
-                    {"sgbm_vertical", k.sgbm_vertical},
-                    {"hole_pixels", k.hole_pixels},
-                    {"filled_pixels", k.filled_pixels},
-                    {"carried_pixels", k.carried_pixels},
-                    {"corrected_pixels", k.corrected_pixels},
-                    {"witnesses", k.witnesses},
-                    {"corroborated_pixels", k.corroborated_pixels},
-                    {"seen_through_pixels", k.seen_through_pixels},
-                    {"fill_rate", k.hole_pixels ? double(k.filled_pixels) / k.hole_pixels : 0.0},
-                    {"stereo_error_median_m", k.stereo_error_median_m},
-                    {"ms", k.ms},
-                    {"termination", k.termination}});
-  }
-  std::sort(ms.begin(), ms.end());
-  return {{"hole_pixels", holes},
-          {"filled_pixels", filled},
-          {"fill_rate", holes ? double(filled) / holes : 0.0},
-          {"carried_pixels", carried},
-          {"corrected_pixels", corrected},
-          {"corroborated_pixels", corroborated},
-          {"seen_through_pixels", seen_through},
-          {"stereo_error_median_m", errors.empty() ? json() : json(Median(errors))},
-          {"keyframes_filled", static_cast<int>(keyframes.size())},
-          {"keyframes_paired", paired},
-          {"keyframes_dropped", dropped},
-          {"keyframes_not_filled", not_filled},
-          {"failed_keyframes", failed},
-          {"pair_paths", paths},
-          {"sgbm_refused", refused},
-          {"sgbm_rescaled", rescaled},
-          {"sgbm_vertical", vertical},
-          {"pair_median_ms", ms.empty() ? json() : json(ms[ms.size() / 2])},
-          {"pair_max_ms", ms.empty() ? json() : json(ms.back())},
-          {"per_keyframe", list}};
+  return FillReport::Of(done, dropped_, accepted_ - static_cast<int>(done.size()) + not_filled_);
 }
 
 }  // namespace gf

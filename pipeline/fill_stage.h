@@ -38,6 +38,7 @@
 #include "pipeline/bounded_queue.h"
 #include "pipeline/fusion_stage.h"
 #include "pipeline/run_sink.h"
+#include "pipeline/stage_reports.h"
 #include "pipeline/stage_thread.h"
 #include "fill/keyframe_filler.h"
 
@@ -57,10 +58,6 @@ struct FillStageOptions {
   KeyframeFillerOptions Filler() const;
   bool Check(std::string* message = nullptr) const;
 };
-
-// report.json's "fill" object from the keyframes' records.
-nlohmann::ordered_json FillReport(const std::vector<KeyframeFill>& keyframes, int dropped,
-                                  int not_filled);
 
 class FillStage {
  public:
@@ -88,7 +85,7 @@ class FillStage {
   // Keyframes offered and keyframes done so far (any thread).
   int offered() const { return accepted_; }
   int done() const { return done_count_; }
-  nlohmann::ordered_json Report() const;
+  FillReport Report() const;  // report.json's "fill"
   std::vector<KeyframeFill> keyframes() const;
 
   // CPU seconds the stage's own threads used, once they have ended.

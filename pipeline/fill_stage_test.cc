@@ -44,14 +44,14 @@ TEST(FillStage, AKeyframeThatFailsIsSkippedAndTheRestAreFilled) {
   FillStage stage(synth::SynthCamera(), options, &sink);
   for (size_t i = 0; i < c.frames.size(); ++i) EXPECT_TRUE(stage.Offer(c.frames[i], c.poses[i]));
   ASSERT_NO_THROW(stage.Finish());
-  const nlohmann::ordered_json report = stage.Report();
-  ASSERT_EQ(report["failed_keyframes"].size(), 1u) << report.dump(2);
+  const FillReport report = stage.Report();
+  ASSERT_EQ(report.failed_keyframes.size(), 1u) << nlohmann::ordered_json(report).dump(2);
   // In-memory frames without timestamps are named by their index.
-  EXPECT_EQ(report["failed_keyframes"][0]["timestamp"], std::to_string(c.frames[3].index));
-  EXPECT_FALSE(report["failed_keyframes"][0]["reason"].get<std::string>().empty());
-  EXPECT_EQ(report["keyframes_filled"], 8);
-  EXPECT_EQ(report["keyframes_not_filled"], 0);
-  EXPECT_GT(report["filled_pixels"].get<long>(), 0);
+  EXPECT_EQ(report.failed_keyframes[0].timestamp, std::to_string(c.frames[3].index));
+  EXPECT_FALSE(report.failed_keyframes[0].reason.empty());
+  EXPECT_EQ(report.keyframes_filled, 8);
+  EXPECT_EQ(report.keyframes_not_filled, 0);
+  EXPECT_GT(report.filled_pixels, 0);
   for (const RgbdFrame& f : c.frames)
     EXPECT_TRUE(std::filesystem::exists(
         dir / ("keyframes/" + std::to_string(f.index) + ".depth_filled.png")))
@@ -68,9 +68,9 @@ TEST(FillStage, CancelLeavesTheQueuedKeyframesUnfilledAndCounted) {
   stage.Cancel();
   EXPECT_FALSE(stage.Offer(c.frames[0], c.poses[0]));  // stopped: refused and counted
   ASSERT_NO_THROW(stage.Finish());
-  const nlohmann::ordered_json report = stage.Report();
-  EXPECT_EQ(report["keyframes_filled"].get<int>() + report["keyframes_not_filled"].get<int>(), 7)
-      << report.dump(2);
+  const FillReport report = stage.Report();
+  EXPECT_EQ(report.keyframes_filled + report.keyframes_not_filled, 7)
+      << nlohmann::ordered_json(report).dump(2);
 }
 
 // A keyframe offered with its depth moved to the stamp's instant (as the track stage does where

@@ -11,13 +11,10 @@
 #include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "acquisition/stats.h"
-#include "pipeline/timing.h"
 #include "surfels/render.h"
 
 namespace gf {
 namespace {
-
-using json = nlohmann::ordered_json;
 
 const char* SourceName(size_t source) {
   switch (static_cast<DepthSource>(source)) {
@@ -53,23 +50,6 @@ bool FusionStageOptions::Check(std::string* message) const {
              kMoreFramesThanACapture)
       .Part("fusion", fusion);
   return c.ok();
-}
-
-json SurfelReport(const SurfelFusion& fusion, const std::vector<json>& over_time) {
-  const SurfelCounts c = fusion.Counts();
-  json by_source = json::object(), area = json::object(), unstable = json::object();
-  for (size_t k = 1; k < c.stable.size(); ++k) {
-    by_source[SourceName(k)] = c.stable[k];
-    area[SourceName(k)] = c.stable_area_m2[k];
-    unstable[SourceName(k)] = c.unstable[k];
-  }
-  return {{"count", c.total_stable()},
-          {"by_source", by_source},
-          {"area_m2", area},
-          {"unstable", unstable},
-          {"bytes_per_surfel", sizeof(Surfel)},
-          {"memory_bytes", fusion.MemoryBytes()},
-          {"count_over_time", over_time}};
 }
 
 FusionStage::FusionStage(const Camera& camera, const FusionStageOptions& options,
@@ -331,30 +311,38 @@ void FusionStage::Fuse(const Item& item, const SE3& world_from_camera, Map* m) {
 
 void FusionStage::Record(Map* m) const {
   const SurfelCounts c = m->fusion.Counts();
-  m->over_time.push_back({{"frame", m->fusion.frames()},
-                          {"stable", c.total_stable()},
-                          {"sensor", c.stable[static_cast<int>(DepthSource::kSensor)]},
-                          {"stereo_fill", c.stable[static_cast<int>(DepthSource::kStereo)]},
-                          {"unstable", c.unstable[0] + c.unstable[1] + c.unstable[2] +
-                                           c.unstable[3] + c.unstable[4]}});
+  m->over_time.push_back({m->fusion.frames(), c.total_stable(),
+                          c.stable[static_cast<int>(DepthSource::kSensor)],
+                          c.stable[static_cast<int>(DepthSource::kStereo)],
+                          c.unstable[0] + c.unstable[1] + c.unstable[2] + c.unstable[3] +
+                              c.unstable[4]});
 }
 
-json FusionStage::Report(size_t index) const {
+SurfelReport FusionStage::Report(size_t index) const {
   const Map& m = maps_.at(index);
-  json r = SurfelReport(m.fusion, m.over_time);
-  r["variant"] = m.variant.name;
-  r["fills_fused"] = m.fill_ms.size();
-  r["frame_ms"] = TimingJson(m.frame_ms);
-  r["fill_ms"] = TimingJson(m.fill_ms);
-  r["merged_as_copies"] = m.redundant;
-  r["budget"] = options_.fusion.max_surfels;
-  r["removed_over_budget"] = m.over_budget;
-  r["failed_items"] = m.failed_frames + m.failed_fills;
-  r["failed_frames"] = m.failed_frames;
-  r["failed_fills"] = m.failed_fills;
-  r["first_failure"] = m.first_failure.empty() ? json() : json(m.first_failure);
-  r["dropped_items"] = dropped_.load();
-  r["corrections_applied"] = corrections_applied_;
+  const SurfelCounts c = m.fusion.Counts();
+  SurfelReport r;
+  r.count = c.total_stable();
+  for (size_t k = 1; k < c.stable.size(); ++k) {
+    r.by_source.push_back({SourceName(k), c.stable[k]});
+    r.area_m2.push_back({SourceName(k), c.stable_area_m2[k]});
+    r.unstable.push_back({SourceName(k), c.unstable[k]});
+  }
+  r.bytes_per_surfel = sizeof(Surfel);
+  r.memory_bytes = m.fusion.MemoryBytes();
+  r.count_over_time = m.over_time;
+  r.variant = m.variant.name;
+  r.fills_fused = m.fill_ms.size();
+  r.frame_ms = StepTimes::Of(m.frame_ms);
+  r.fill_ms = StepTimes::Of(m.fill_ms);
+  r.merged_as_copies = m.redundant;
+  r.budget = options_.fusion.max_surfels;
+  r.removed_over_budget = m.over_budget;
+  r.failed_frames = m.failed_frames;
+  r.failed_fills = m.failed_fills;
+  if (!m.first_failure.empty()) r.first_failure = m.first_failure;
+  r.dropped_items = dropped_.load();
+  r.corrections_applied = corrections_applied_;
   return r;
 }
 

@@ -38,7 +38,6 @@
 #include <deque>
 #include <functional>
 #include <mutex>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -48,6 +47,7 @@
 #include "pipeline/bounded_queue.h"
 #include "pipeline/pose_corrections.h"
 #include "pipeline/run_sink.h"
+#include "pipeline/stage_reports.h"
 #include "pipeline/stage_thread.h"
 #include "fill/keyframe_filler.h"
 #include "surfels/fusion.h"
@@ -145,7 +145,7 @@ class FusionStage {
   bool Prediction(int frames, std::chrono::milliseconds timeout, cv::Mat* depth,
                   SE3* world_from_camera);
   // report.json's "surfels" for variant `index`.
-  nlohmann::ordered_json Report(size_t index = 0) const;
+  SurfelReport Report(size_t index = 0) const;
   // After Finish(): what the first variant's model offers a keyframe at world_from_camera (at the
   // final corrections): its depth where the nearest stable surfel is a fill, gaps between the
   // fill discs closed (completion_max_gap_px), kept where the surface is confirmed from that side
@@ -171,7 +171,7 @@ class FusionStage {
   struct Map {
     Variant variant;
     SurfelFusion fusion;
-    std::vector<nlohmann::ordered_json> over_time;  // counts every count_every frames
+    std::vector<SurfelCountAt> over_time;  // counts every count_every frames
     std::vector<double> frame_ms, fill_ms;
     int failed_frames = 0, failed_fills = 0;
     std::string first_failure;  // what the first failed item threw
@@ -216,10 +216,5 @@ class FusionStage {
   int corrections_applied_ = 0;
   StageThread worker_;
 };
-
-// report.json's "surfels" object of a fusion: stable count (the surfels map.ply holds), the
-// counts by source, their area, and how they grew.
-nlohmann::ordered_json SurfelReport(const SurfelFusion& fusion,
-                                    const std::vector<nlohmann::ordered_json>& over_time);
 
 }  // namespace gf

@@ -8,12 +8,10 @@
 
 #include "acquisition/bounds.h"
 #include "acquisition/errors.h"
-#include "pipeline/timing.h"
 
 namespace gf {
 namespace {
 
-using json = nlohmann::ordered_json;
 using Clock = std::chrono::steady_clock;
 constexpr double kRadPerDeg = M_PI / 180.0;
 
@@ -211,9 +209,8 @@ void LoopClosureStage::Record(const LoopKeyframeItem& item, const LoopDetection&
   for (const PoseGraphEdge& e : detection.accepted) {
     if (accepted_.size() >= 500) break;  // the report lists the first ones
     const auto other = database_.Find(e.from);
-    accepted_.push_back({{"keyframe", name},
-                         {"with", other ? other->name : std::to_string(e.from)},
-                         {"correction", detection.consistent_correction}});
+    accepted_.push_back(
+        {name, other ? other->name : std::to_string(e.from), detection.consistent_correction});
   }
 }
 
@@ -256,35 +253,32 @@ std::optional<Relocalisation> LoopClosureStage::Relocalise(const RgbdFrame& fram
   return std::nullopt;
 }
 
-json LoopClosureStage::Report() const {
-  int loop_edges = 0, rejected = 0;
+LoopReport LoopClosureStage::Report() const {
+  LoopReport r;
+  r.enabled = true;
   for (const PoseGraphEdge& e : graph_.edges()) {
-    loop_edges += e.kind == PoseGraphEdge::Kind::kLoop;
-    rejected += e.rejected;
+    r.accepted += e.kind == PoseGraphEdge::Kind::kLoop;
+    r.rejected_by_graph += e.rejected;
   }
-  json refused = json::object();
-  for (const auto& [reason, n] : refused_) refused[reason] = n;
+  r.refused = refused_;
   std::shared_lock<std::shared_mutex> lock(database_mutex_);
-  return {{"enabled", true},
-          {"keyframes", keyframes_done_.load()},
-          {"keyframes_dropped", dropped_.load()},
-          {"keyframes_stored", static_cast<int>(database_.keyframes().size())},
-          {"keyframes_same_place", same_place_},
-          {"keyframes_held", graph_.held_count()},
-          {"keyframes_failed", failed_},
-          {"candidates", candidates_},
-          {"verified", verified_},
-          {"accepted", loop_edges},
-          {"rejected_by_graph", rejected},
-          {"pending_when_seen", pending_},
-          {"refused", refused},
-          {"optimisations", optimisations_},
-          {"optimisation_ms", TimingJson(optimise_ms_)},
-          {"keyframe_ms", TimingJson(keyframe_ms_)},
-          {"relocalisation",
-           {{"attempts", relocalisation_attempts_.load()}, {"found", relocalised_.load()}}},
-          {"database_bytes", database_.MemoryBytes()},
-          {"loops", accepted_}};
+  r.keyframes = keyframes_done_.load();
+  r.keyframes_dropped = dropped_.load();
+  r.keyframes_stored = static_cast<int>(database_.keyframes().size());
+  r.keyframes_same_place = same_place_;
+  r.keyframes_held = graph_.held_count();
+  r.keyframes_failed = failed_;
+  r.candidates = candidates_;
+  r.verified = verified_;
+  r.pending_when_seen = pending_;
+  r.optimisations = optimisations_;
+  r.optimisation_ms = StepTimes::Of(optimise_ms_);
+  r.keyframe_ms = StepTimes::Of(keyframe_ms_);
+  r.relocalisation_attempts = relocalisation_attempts_.load();
+  r.relocalised = relocalised_.load();
+  r.database_bytes = database_.MemoryBytes();
+  r.loops = accepted_;
+  return r;
 }
 
 }  // namespace gf

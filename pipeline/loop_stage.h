@@ -21,7 +21,6 @@
 
 #include <atomic>
 #include <functional>
-#include <nlohmann/json.hpp>
 #include <set>
 #include <shared_mutex>
 #include <vector>
@@ -30,6 +29,7 @@
 #include "acquisition/rgbd_frame.h"
 #include "pipeline/bounded_queue.h"
 #include "pipeline/pose_corrections.h"
+#include "pipeline/stage_reports.h"
 #include "pipeline/stage_thread.h"
 #include "registration/keyframe_database.h"
 #include "registration/loop_detector.h"
@@ -105,7 +105,7 @@ class LoopClosureStage : public Relocaliser {
   void Cancel();
   int keyframes_done() const { return keyframes_done_; }
   // report.json's "loops".
-  nlohmann::ordered_json Report() const;
+  LoopReport Report() const;
 
   // CPU seconds the stage's own thread used, once it has ended.
   double cpu_seconds() const { return worker_.cpu_seconds(); }
@@ -133,7 +133,7 @@ class LoopClosureStage : public Relocaliser {
   std::set<int> tied_;          // keyframes a loop edge ties, not yet held
   int last_id_ = -1;
   bool unoptimised_loops_ = false;
-  nlohmann::ordered_json accepted_ = nlohmann::ordered_json::array();
+  std::vector<AcceptedLoop> accepted_;  // the first ones, for the report
   std::map<std::string, int> refused_;  // reasons, without their figures
   int candidates_ = 0, verified_ = 0, pending_ = 0, optimisations_ = 0, failed_ = 0;
   int same_place_ = 0;  // keyframes not stored: their place was (same_place)

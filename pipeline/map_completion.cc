@@ -39,9 +39,11 @@ KeyframeCompletion CompleteOne(const KeyframeFill& k, const std::map<std::string
 
 }  // namespace
 
-nlohmann::ordered_json CompleteFromMap(const FillStage& fill, FusionStage* fusion, const Trajectory& trajectory,
-                     const std::vector<std::string>& names, RunSink* sink,
-                     const std::function<bool()>& stop, std::vector<std::string>* warnings) {
+ModelCompletionReport CompleteFromMap(const FillStage& fill, FusionStage* fusion,
+                                      const Trajectory& trajectory,
+                                      const std::vector<std::string>& names, RunSink* sink,
+                                      const std::function<bool()>& stop,
+                                      std::vector<std::string>* warnings) {
   std::map<std::string, SE3> poses;  // by frame name (trajectory entry i is frame names[i])
   for (size_t i = 0; i < trajectory.size() && i < names.size(); ++i)
     poses[names[i]] = trajectory[i].world_from_camera;
@@ -71,29 +73,23 @@ nlohmann::ordered_json CompleteFromMap(const FillStage& fill, FusionStage* fusio
   for (size_t t = 0; t < helpers; ++t) threads.emplace_back(work, false);
   work(true);
   for (std::thread& t : threads) t.join();
-  int keyframes = 0, done = 0, glass_keyframes = 0;
-  long pixels = 0, glass_pixels = 0;
+  ModelCompletionReport report;
   for (const KeyframeCompletion& r : results) {
-    done += r.done;
-    keyframes += r.completed > 0;
-    pixels += r.completed;
-    glass_keyframes += r.glass > 0;
-    glass_pixels += r.glass;
+    report.keyframes_done += r.done;
+    report.keyframes += r.completed > 0;
+    report.pixels += r.completed;
+    report.glass_keyframes += r.glass > 0;
+    report.glass_pixels += r.glass;
     if (r.warning.empty()) continue;
     warnings->push_back(r.warning);
     spdlog::warn("{}", r.warning);
   }
-  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  report.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  report.stopped = stopped.load();
+  report.keyframes_to_do = static_cast<int>(keyframes_filled.size());
   spdlog::info("model completion: {} hole pixels of {} keyframes from the map's fills, {:.1f} s",
-               pixels, keyframes, seconds);
-  return {{"keyframes", keyframes},
-          {"pixels", pixels},
-          {"seconds", seconds},
-          {"stopped", stopped.load()},
-          {"keyframes_done", done},
-          {"keyframes_to_do", static_cast<int>(keyframes_filled.size())},
-          {"glass_keyframes", glass_keyframes},
-          {"glass_pixels", glass_pixels}};
+               report.pixels, report.keyframes, report.seconds);
+  return report;
 }
 
 }  // namespace gf

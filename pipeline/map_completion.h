@@ -3,7 +3,6 @@
 #pragma once
 
 #include <functional>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -11,6 +10,7 @@
 #include "pipeline/fill_stage.h"
 #include "pipeline/fusion_stage.h"
 #include "pipeline/run_sink.h"
+#include "pipeline/stage_reports.h"
 
 namespace gf {
 
@@ -18,13 +18,13 @@ namespace gf {
 // fills at the keyframe's final pose, on every core (the keyframes are independent, so the
 // outputs do not depend on which thread did which). A keyframe that cannot be completed stays as
 // its fill left it (a warning); the others go on. `stop` is asked on this thread between its
-// keyframes (true: the keyframes not started stay as they are). report.json's
+// keyframes (true: the keyframes not started stay as they are). Returns report.json's
 // fill.model_completion.
 // `names[i]` is the frame name of trajectory entry i; warnings are appended to *warnings.
-nlohmann::ordered_json CompleteFromMap(const FillStage& fill, FusionStage* fusion,
-                                       const Trajectory& trajectory,
-                                       const std::vector<std::string>& names, RunSink* sink,
-                                       const std::function<bool()>& stop,
-                                       std::vector<std::string>* warnings);
+ModelCompletionReport CompleteFromMap(const FillStage& fill, FusionStage* fusion,
+                                      const Trajectory& trajectory,
+                                      const std::vector<std::string>& names, RunSink* sink,
+                                      const std::function<bool()>& stop,
+                                      std::vector<std::string>* warnings);
 
 }  // namespace gf

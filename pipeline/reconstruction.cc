@@ -50,20 +50,24 @@ json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
   report["frames"] = summary.frames;
   report["fps"] = summary.fps;
   report["seconds"] = summary.seconds;
-  report["stages"] = {{"read", TimingJson(tracking.read_ms)},
-                      {"track", TimingJson(tracking.track_ms)}};
+  report["stages"] = {{"read", StepTimes::Of(tracking.read_ms)},
+                      {"track", StepTimes::Of(tracking.track_ms)}};
+  std::optional<FillReport> fill_report;
   if (fill) {
+    fill_report = fill->Report();
     std::vector<double> stereo_ms;  // per keyframe: stereo, validation and carry
-    for (const KeyframeFill& k : fill->keyframes())
+    for (const KeyframeFill& k : fill_report->per_keyframe)
       if (!k.partner.empty()) stereo_ms.push_back(k.ms);
-    report["stages"]["stereo"] = TimingJson(stereo_ms);
+    report["stages"]["stereo"] = StepTimes::Of(stereo_ms);
   }
+  std::optional<SurfelReport> surfels;
   if (fusion) {
-    const json f = fusion->Report();
-    report["stages"]["fusion"] = f["frame_ms"];
-    report["stages"]["fusion_fill"] = f["fill_ms"];
+    surfels = fusion->Report();
+    report["stages"]["fusion"] = surfels->frame_ms;
+    report["stages"]["fusion_fill"] = surfels->fill_ms;
   }
-  if (loop) report["stages"]["loop_closure"] = loop->Report()["keyframe_ms"];
+  const LoopReport loops = loop ? loop->Report() : LoopReport();
+  if (loop) report["stages"]["loop_closure"] = loops.keyframe_ms;
   report["keyframes"] = summary.keyframes;
   constexpr size_t kListed = 1000;  // lost frames named in the report at most
   report["tracking"] = {
@@ -74,9 +78,9 @@ json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
                    tracking.lost_frames.begin(),
                    tracking.lost_frames.begin() +
                        static_cast<long>(std::min(kListed, tracking.lost_frames.size())))}};
-  report["loops"] = loop ? loop->Report() : json{{"enabled", false}};
-  report["fill"] = fill ? fill->Report() : json();
-  report["surfels"] = fusion ? fusion->Report() : json();
+  report["loops"] = loops;
+  report["fill"] = fill_report ? json(*fill_report) : json();
+  report["surfels"] = surfels ? json(*surfels) : json();
   report["warnings"] = summary.warnings;
   return report;
 }
@@ -212,15 +216,14 @@ ReconstructionSummary Reconstruction::Summarise(const FrameSource& source, const
   summary.seconds = seconds;
   summary.fps = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
   if (s.fill) {
-    const json f = s.fill->Report();
-    summary.hole_pixels = f["hole_pixels"];
-    summary.filled_pixels = f["filled_pixels"];
-    for (const auto& k : f["failed_keyframes"])
-      summary.warnings.push_back("keyframe " + k["timestamp"].get<std::string>() +
-                                 " not filled: " + k["reason"].get<std::string>());
+    const FillReport f = s.fill->Report();
+    summary.hole_pixels = f.hole_pixels;
+    summary.filled_pixels = f.filled_pixels;
+    for (const FailedKeyframe& k : f.failed_keyframes)
+      summary.warnings.push_back("keyframe " + k.timestamp + " not filled: " + k.reason);
   }
-  if (s.fusion) summary.surfels = s.fusion->Report()["count"];
-  if (s.loop) summary.loops = s.loop->Report()["accepted"];
+  if (s.fusion) summary.surfels = s.fusion->Report().count;
+  if (s.loop) summary.loops = s.loop->Report().accepted;
   summary.most_lost = summary.frames >= 2 && summary.lost > kMostFramesLost * summary.frames;
   if (summary.most_lost)
     summary.warnings.push_back("tracking was lost on " + std::to_string(summary.lost) + " of " +
@@ -239,21 +242,21 @@ void Reconstruction::RefuseIfUnusable(const Stages& s, ReconstructionSummary* su
           ": the trajectory is not usable (is the depth valid? `glassfusion info` shows its "
           "holes; --allow-lost accepts such a run)";
   } else if (s.fusion && tracked > 0) {
-    const json f = s.fusion->Report();
-    if (f["failed_frames"].get<int>() >= tracked)
+    const SurfelReport f = s.fusion->Report();
+    if (f.failed_frames >= tracked)
       why = "the fusion failed on every frame (" + std::to_string(tracked) +
-            "): " + f["first_failure"].get<std::string>();
+            "): " + f.first_failure.value_or("");
     else if (summary->surfels == 0)
       why = "the map is empty: no surface was seen by enough of the " + std::to_string(tracked) +
             " tracked frames to be kept (too few frames, or are the camera and the depth scale "
             "right?)";
   }
   if (why.empty() && s.fill) {
-    const json f = s.fill->Report();
-    const size_t failed = f["failed_keyframes"].size();
-    if (failed > 0 && failed == static_cast<size_t>(f["keyframes_filled"].get<int>()))
-      why = "the fill failed on every keyframe (" + std::to_string(failed) + "): " +
-            f["failed_keyframes"][0]["reason"].get<std::string>();
+    const FillReport f = s.fill->Report();
+    const size_t failed = f.failed_keyframes.size();
+    if (failed > 0 && failed == static_cast<size_t>(f.keyframes_filled))
+      why = "the fill failed on every keyframe (" + std::to_string(failed) +
+            "): " + f.failed_keyframes[0].reason;
   }
   if (why.empty()) return;
   summary->complete = false;
@@ -289,7 +292,7 @@ void MarkIncomplete(const std::string& because, const std::string& phase,
 }
 
 // The report of the without-fill folder (compare): the same run, its own map, no fill.
-json WithoutFillReport(const json& report, const json& surfels) {
+json WithoutFillReport(const json& report, const SurfelReport& surfels) {
   json out = report;
   out["config"]["stereo_fill"] = false;
   out["fill"] = nullptr;
@@ -317,18 +320,18 @@ void Reconstruction::CompleteKeyframes(const Stages& s, RunSink* sink,
                                        ReconstructionSummary* summary) const {
   if (!s.fill || !s.fusion || !options_.fusion_options.complete_keyframes) return;
   std::vector<std::string> warnings;
-  const json record = CompleteFromMap(*s.fill, s.fusion.get(),
-                                      CorrectedTrajectory(s.tracker->record(), s.corrections),
-                                      s.tracker->record().names, sink, stop, &warnings);
+  const ModelCompletionReport record =
+      CompleteFromMap(*s.fill, s.fusion.get(), CorrectedTrajectory(s.tracker->record(), s.corrections),
+                      s.tracker->record().names, sink, stop, &warnings);
   summary->report["fill"]["model_completion"] = record;
   for (const std::string& w : warnings) {
     summary->warnings.push_back(w);
     summary->report["warnings"].push_back(w);
   }
-  if (record["stopped"].get<bool>())
-    MarkIncomplete(stop_reason, "map completion (" + std::to_string(record["keyframes_done"].get<int>()) +
-                                    " of " + std::to_string(record["keyframes_to_do"].get<int>()) +
-                                    " keyframes done)",
+  if (record.stopped)
+    MarkIncomplete(stop_reason,
+                   "map completion (" + std::to_string(record.keyframes_done) + " of " +
+                       std::to_string(record.keyframes_to_do) + " keyframes done)",
                    summary);
 }
 
@@ -423,8 +426,9 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
     summary.stopped_during = error ? error_phase : stop_phase;
   if (!summary.complete) summary.report["stopped_during"] = summary.stopped_during;
   if (without_fill) {
-    summary.surfels_without_fill = s->fusion->Report(1)["count"];
-    summary.report_without_fill = WithoutFillReport(summary.report, s->fusion->Report(1));
+    const SurfelReport without = s->fusion->Report(1);
+    summary.surfels_without_fill = without.count;
+    summary.report_without_fill = WithoutFillReport(summary.report, without);
   }
   WriteOutputs(*s, sink, without_fill, summary);
   phase = "map completion";

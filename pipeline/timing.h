@@ -1,6 +1,5 @@
-// How long a stage's steps took, as report.json and bench write it: {"median_ms", "max_ms",
-// "count"} (null times when there were none), the CPU time a run used, by stage, and the
-// process's resident memory (Linux: /proc/self/statm and getrusage).
+// The CPU time a run used, by stage, and the process's resident memory (Linux: /proc/self/statm
+// and getrusage). How long a stage's steps took is StepTimes (pipeline/stage_reports.h).
 #pragma once
 
 #include <sys/resource.h>
@@ -15,12 +14,6 @@
 #include <vector>
 
 namespace gf {
-
-inline nlohmann::ordered_json TimingJson(std::vector<double> ms) {
-  if (ms.empty()) return {{"median_ms", nullptr}, {"max_ms", nullptr}, {"count", 0}};
-  std::sort(ms.begin(), ms.end());
-  return {{"median_ms", ms[ms.size() / 2]}, {"max_ms", ms.back()}, {"count", ms.size()}};
-}
 
 // CPU seconds (user and system) the whole process has used so far, every thread.
 inline double ProcessCpuSeconds() {

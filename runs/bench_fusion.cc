@@ -4,7 +4,7 @@
 #include <opencv2/core/utility.hpp>
 
 #include "acquisition/progress.h"
-#include "pipeline/timing.h"
+#include "pipeline/stage_reports.h"
 
 namespace gf {
 namespace {
@@ -34,10 +34,10 @@ json BenchFusion(const std::vector<RgbdFrame>& frames, const Trajectory& tracked
   std::vector<Surfel> built;
   for (int t : {1, 2}) {
     SurfelFusion fusion(camera, options);
-    const std::unique_ptr<Progress> progress = ShowProgress("bench: fusion, " + std::to_string(t) + " thread(s)",
-                              static_cast<int>(frames.size()));
+    const std::unique_ptr<Progress> progress = ShowProgress(
+        "bench: fusion, " + std::to_string(t) + " thread(s)", static_cast<int>(frames.size()));
     out["map"]["threads_" + std::to_string(t)] =
-        TimingJson(FuseAll(frames, tracked, t, &fusion, progress.get()));
+        StepTimes::Of(FuseAll(frames, tracked, t, &fusion, progress.get()));
     out["map"]["surfels"] = fusion.map().live();
     out["map"]["stable_surfels"] = fusion.Counts().total_stable();
     out["map"]["memory_bytes"] = fusion.MemoryBytes();
@@ -58,7 +58,7 @@ json BenchFusion(const std::vector<RgbdFrame>& frames, const Trajectory& tracked
       const std::unique_ptr<Progress> progress = ShowProgress("bench: fusion, large map, " + std::to_string(t) + " thread(s)",
                                 static_cast<int>(frames.size()));
       const std::vector<double> ms = FuseAll(frames, tracked, t, &fusion, progress.get());
-      out["large_map"]["threads_" + std::to_string(t)] = TimingJson(ms);
+      out["large_map"]["threads_" + std::to_string(t)] = StepTimes::Of(ms);
       out["large_map"]["surfels"] = fusion.map().live();
       out["large_map"]["memory_bytes"] = fusion.MemoryBytes();
     }
