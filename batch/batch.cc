@@ -23,6 +23,7 @@
 #include "acquisition/json_text.h"
 #include "acquisition/progress.h"
 #include "acquisition/run_layout.h"
+#include "pipeline/run_reader.h"
 
 extern char** environ;
 
@@ -61,10 +62,9 @@ bool AlreadyDone(const std::string& out_dir, const BatchCapture& c,
                  const std::string& fingerprint) {
   const RunLayout run((fs::path(out_dir) / c.name).string());
   const json state = ReadJsonIfAny((StateDir(out_dir) / (c.name + ".json")).string());
-  const json report = ReadJsonIfAny(run.Map(true).Path(RunLayout::kReport));
   return IsRegularFile(run.Path(RunLayout::kCompare)) && state.is_object() &&
          state.value("status", "") == "done" && state.value("fingerprint", "") == fingerprint &&
-         report.is_object() && report.value("complete", false);
+         ReportIfAny(run.Map(true)).value_or(RunReport()).complete;
 }
 
 // 64-bit FNV-1a: the same digits on every build and machine (std::hash promises neither).
@@ -301,6 +301,14 @@ json ReadJsonIfAny(const std::string& path) {
     return json::parse(ReadTextFile(path));
   } catch (const std::exception&) {
     return json();
+  }
+}
+
+std::optional<RunReport> ReportIfAny(const RunLayout& run) {
+  try {
+    return RunReader(run).Report();
+  } catch (const std::exception&) {
+    return std::nullopt;
   }
 }
 

@@ -42,10 +42,13 @@
 #include <atomic>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "acquisition/run_folder.h"
+#include "acquisition/run_layout.h"
+#include "pipeline/run_report.h"
 
 namespace gf {
 
@@ -112,5 +115,7 @@ std::unique_ptr<RunFolder> OpenBatchFolder(const std::string& out_dir, const std
 // This executable (/proc/self/exe): child captures and Slurm tasks run the same build.
 std::string ExecutablePath();
 nlohmann::ordered_json ReadJsonIfAny(const std::string& path);
+// A run folder's report.json, or none when it is missing or not a run's report.
+std::optional<RunReport> ReportIfAny(const RunLayout& run);
 
 }  // namespace gf

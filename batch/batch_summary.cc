@@ -54,8 +54,8 @@ Row MakeRow(const std::string& out_dir, const json& capture) {
   if (state.is_object()) row.seconds = Fixed(state.value("seconds", 0.0), 1);
   if (row.status == "failed") row.error = state["error"].is_string() ? state["error"] : "";
   const json compare = ReadJsonIfAny(run.Path(RunLayout::kCompare));
-  const json report = ReadJsonIfAny(run.Map(true).Path(RunLayout::kReport));
-  if (row.status != "done" || !compare.is_object() || !report.is_object()) return row;
+  const std::optional<RunReport> report = ReportIfAny(run.Map(true));
+  if (row.status != "done" || !compare.is_object() || !report) return row;
   row.frames = std::to_string(compare.value("frames", 0));
   row.ate_m = Ate(compare, capture["input"], run);
   row.surfels_with = compare["with_fill"]["surfels"]["count"].dump();
@@ -66,7 +66,7 @@ Row MakeRow(const std::string& out_dir, const json& capture) {
         Fixed(with["completeness"]["overall"]["within_2cm"].get<double>() -
                   compare["without_fill"]["completeness"]["overall"]["within_2cm"].get<double>(),
               4);
-  if (report["fill"].is_object()) row.fill_rate = Fixed(report["fill"].value("fill_rate", 0.0), 4);
+  if (report->fill) row.fill_rate = Fixed(report->fill->fill_rate(), 4);
   row.report = row.name + "/report.html";
   return row;
 }

@@ -98,11 +98,11 @@ TEST(LoopClosure, RemovesMostOfASimulatedDriftAndTheMapFollows) {
   EXPECT_GT(without->ate_m, 0.02);
   EXPECT_LT(with->ate_m, 0.5 * without->ate_m)
       << "without " << without->ate_m << " m, with " << with->ate_m << " m";
-  const auto& loops = with->summary.report["loops"];
-  EXPECT_GT(loops["accepted"].get<int>(), 0);
-  EXPECT_GT(loops["optimisations"].get<int>(), 0);
-  EXPECT_EQ(loops["keyframes"].get<int>(), with->summary.keyframes);
-  EXPECT_EQ(without->summary.report["loops"]["enabled"], false);
+  const LoopReport& loops = with->summary.report.loops;
+  EXPECT_GT(loops.accepted, 0);
+  EXPECT_GT(loops.optimisations, 0);
+  EXPECT_EQ(loops.keyframes, with->summary.keyframes);
+  EXPECT_FALSE(without->summary.report.loops.enabled);
   // The map moved with its keyframes: it renders the true depth where the drifted one does not.
   const double map_with = MapDepthError(with->sink.map);
   const double map_without = MapDepthError(without->sink.map);
@@ -118,8 +118,9 @@ TEST(LoopClosure, RemovesMostOfASimulatedDriftAndTheMapFollows) {
 // stage keeps up with every keyframe long before the fusion needs its corrections).
 TEST(LoopClosure, TheCorrectionsJoinTheMapAtFixedPointsOfTheSequence) {
   const auto first = Reconstruct(Loop().frames, true, 1.0, true);
-  ASSERT_GT(first->summary.report["loops"]["accepted"].get<int>(), 0);
-  ASSERT_GT(first->summary.report["surfels"]["corrections_applied"].get<int>(), 0);
+  ASSERT_GT(first->summary.report.loops.accepted, 0);
+  ASSERT_TRUE(first->summary.report.surfels);
+  ASSERT_GT(first->summary.report.surfels->corrections_applied, 0);
   const auto second = Reconstruct(Loop().frames, true, 1.0, true, std::chrono::milliseconds(100));
   testing::ExpectSameRun(first->sink, second->sink);
 }
@@ -168,16 +169,16 @@ TEST(LoopClosure, RelocalisesAfterALossAndReportsTheFramesBetweenLost) {
   InMemoryFrameSource source(c.camera, frames);
   InMemoryRunSink sink;
   const ReconstructionSummary s = Reconstruction(options).Run(source, &sink);
-  const auto& tracking = s.report["tracking"];
-  EXPECT_EQ(tracking["relocalised"].get<int>(), 1) << tracking.dump();
-  EXPECT_EQ(tracking["restarted"].get<int>(), 0);
+  const TrackingReport& tracking = s.report.tracking;
+  EXPECT_EQ(tracking.relocalised, 1);
+  EXPECT_EQ(tracking.restarted, 0);
   // The six blind frames have no pose; at most one frame either side of them may be lost too
   // (measured: frame 35, the one before them, is lost too).
   EXPECT_GE(s.lost, 6);
   EXPECT_LE(s.lost, 8);
   EXPECT_EQ(sink.trajectory.size(), frames.size() - s.lost);
-  for (const auto& name : tracking["lost"]) {
-    const int i = std::stoi(name.get<std::string>());
+  for (const std::string& name : tracking.lost) {
+    const int i = std::stoi(name);
     EXPECT_GE(i, 35);
     EXPECT_LE(i, 42);
   }
@@ -185,7 +186,7 @@ TEST(LoopClosure, RelocalisesAfterALossAndReportsTheFramesBetweenLost) {
   const TrajectoryErrorSummary e = EvaluateTrajectory(truth, sink.trajectory);
   ASSERT_TRUE(e.success);
   EXPECT_LT(e.ate_max_m, 0.02) << e.BriefReport();
-  EXPECT_EQ(s.report["loops"]["relocalisation"]["found"].get<int>(), 1);
+  EXPECT_EQ(s.report.loops.relocalised, 1);
 }
 
 }  // namespace

@@ -8,80 +8,69 @@
 #include <map>
 #include <thread>
 
+#include "acquisition/bounds.h"
 #include "acquisition/errors.h"
 #include "pipeline/map_completion.h"
 #include "pipeline/settings.h"
 #include "pipeline/stages.h"
 #include "pipeline/timing.h"
-#include "acquisition/bounds.h"
 
 namespace gf {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using json = nlohmann::ordered_json;
 
-// report.json (DESIGN.md's keys).
-json MakeReport(const ReconstructionOptions& options, const FrameSource& source,
-                const TrackingRecord& tracking, const FillStage* fill, const FusionStage* fusion,
-                const LoopClosureStage* loop, const ReconstructionSummary& summary) {
-  json report;
-  report["complete"] = summary.complete;
-  if (!summary.complete) {
-    report["stopped_because"] = summary.stopped_because;
-    report["stopped_during"] = summary.stopped_during;
-  }
-  report["input"] = {{"path", options.input_path.empty() ? source.Input() : options.input_path},
-                     {"kind", source.Kind()},
-                     {"first_frame", options.first_frame},
-                     {"end_frame", options.end_frame}};
-  report["config"] = {
-      {"tracker", options.frame_to_model && options.fusion ? "frame_to_keyframe_then_model_icp"
-                                                           : "frame_to_keyframe_icp"},
-      {"stereo_fill", options.fill},
-      {"surfel_fusion", options.fusion},
-      {"loop_closure", options.loop_closure},
-      {"threads", std::string("reader + tracker") + (options.fill ? " + stereo" : "") +
-                      (options.fusion ? " + fusion" : "") +
-                      (options.loop_closure ? " + loop closure" : "")},
-      {"hardware_concurrency", std::thread::hardware_concurrency()},
-      {"file", options.config_file.empty() ? json() : json(options.config_file)},
-      {"settings", SettingsToJson(options)}};
-  report["frames"] = summary.frames;
-  report["fps"] = summary.fps;
-  report["seconds"] = summary.seconds;
-  report["stages"] = {{"read", StepTimes::Of(tracking.read_ms)},
-                      {"track", StepTimes::Of(tracking.track_ms)}};
-  std::optional<FillReport> fill_report;
+// report.json (DESIGN.md's keys), from the stages' reports.
+RunReport MakeReport(const ReconstructionOptions& options, const FrameSource& source,
+                     const TrackingRecord& tracking, const FillStage* fill,
+                     const FusionStage* fusion, const LoopClosureStage* loop,
+                     const ReconstructionSummary& summary) {
+  RunReport report;
+  report.complete = summary.complete;
+  report.stopped_because = summary.stopped_because;
+  report.stopped_during = summary.stopped_during;
+  report.input = {options.input_path.empty() ? source.Input() : options.input_path,
+                  source.Kind(), options.first_frame, options.end_frame};
+  RunConfigReport& c = report.config;
+  c.tracker = options.frame_to_model && options.fusion ? "frame_to_keyframe_then_model_icp"
+                                                        : "frame_to_keyframe_icp";
+  c.stereo_fill = options.fill;
+  c.surfel_fusion = options.fusion;
+  c.loop_closure = options.loop_closure;
+  c.threads = std::string("reader + tracker") + (options.fill ? " + stereo" : "") +
+              (options.fusion ? " + fusion" : "") + (options.loop_closure ? " + loop closure" : "");
+  c.hardware_concurrency = std::thread::hardware_concurrency();
+  if (!options.config_file.empty()) c.file = options.config_file;
+  c.settings = SettingsToJson(options);
+  report.frames = summary.frames;
+  report.fps = summary.fps;
+  report.seconds = summary.seconds;
+  auto& steps = report.stages.steps;
+  steps = {{"read", StepTimes::Of(tracking.read_ms)}, {"track", StepTimes::Of(tracking.track_ms)}};
   if (fill) {
-    fill_report = fill->Report();
+    report.fill = fill->Report();
     std::vector<double> stereo_ms;  // per keyframe: stereo, validation and carry
-    for (const KeyframeFill& k : fill_report->per_keyframe)
+    for (const KeyframeFill& k : report.fill->per_keyframe)
       if (!k.partner.empty()) stereo_ms.push_back(k.ms);
-    report["stages"]["stereo"] = StepTimes::Of(stereo_ms);
+    steps.push_back({"stereo", StepTimes::Of(stereo_ms)});
   }
-  std::optional<SurfelReport> surfels;
   if (fusion) {
-    surfels = fusion->Report();
-    report["stages"]["fusion"] = surfels->frame_ms;
-    report["stages"]["fusion_fill"] = surfels->fill_ms;
+    report.surfels = fusion->Report();
+    steps.push_back({"fusion", report.surfels->frame_ms});
+    steps.push_back({"fusion_fill", report.surfels->fill_ms});
   }
-  const LoopReport loops = loop ? loop->Report() : LoopReport();
-  if (loop) report["stages"]["loop_closure"] = loops.keyframe_ms;
-  report["keyframes"] = summary.keyframes;
+  if (loop) {
+    report.loops = loop->Report();
+    steps.push_back({"loop_closure", report.loops.keyframe_ms});
+  }
+  report.keyframes = summary.keyframes;
   constexpr size_t kListed = 1000;  // lost frames named in the report at most
-  report["tracking"] = {
-      {"lost_frames", summary.lost},
-      {"relocalised", tracking.relocalised},
-      {"restarted", tracking.restarted},
-      {"lost", std::vector<std::string>(
-                   tracking.lost_frames.begin(),
-                   tracking.lost_frames.begin() +
-                       static_cast<long>(std::min(kListed, tracking.lost_frames.size())))}};
-  report["loops"] = loops;
-  report["fill"] = fill_report ? json(*fill_report) : json();
-  report["surfels"] = surfels ? json(*surfels) : json();
-  report["warnings"] = summary.warnings;
+  report.tracking = {summary.lost, tracking.relocalised, tracking.restarted,
+                     std::vector<std::string>(
+                         tracking.lost_frames.begin(),
+                         tracking.lost_frames.begin() +
+                             static_cast<long>(std::min(kListed, tracking.lost_frames.size())))};
+  report.warnings = summary.warnings;
   return report;
 }
 
@@ -268,15 +257,13 @@ void Reconstruction::RefuseIfUnusable(const Stages& s, ReconstructionSummary* su
 namespace {
 
 // `report` as written while the run has not finished: "complete" false, and why.
-json Unfinished(const json& report, const std::string& phase) {
-  json out = {{"complete", false},
-              {"stopped_because",
-               "unfinished: the run had not finished when this report was written (it is still "
-               "running, or it was killed)"},
-              {"stopped_during", phase}};
-  for (const auto& [key, value] : report.items())
-    if (!out.contains(key)) out[key] = value;
-  return out;
+RunReport Unfinished(RunReport report, const std::string& phase) {
+  report.complete = false;
+  report.stopped_because =
+      "unfinished: the run had not finished when this report was written (it is still running, "
+      "or it was killed)";
+  report.stopped_during = phase;
+  return report;
 }
 
 // The summary and its report marked not complete, `because`, during `phase`.
@@ -285,19 +272,17 @@ void MarkIncomplete(const std::string& because, const std::string& phase,
   summary->complete = false;
   summary->stopped_because = because;
   summary->stopped_during = phase;
-  json out = {{"complete", false}, {"stopped_because", because}, {"stopped_during", phase}};
-  for (const auto& [key, value] : summary->report.items())
-    if (!out.contains(key)) out[key] = value;
-  summary->report = out;
+  summary->report.complete = false;
+  summary->report.stopped_because = because;
+  summary->report.stopped_during = phase;
 }
 
 // The report of the without-fill folder (compare): the same run, its own map, no fill.
-json WithoutFillReport(const json& report, const SurfelReport& surfels) {
-  json out = report;
-  out["config"]["stereo_fill"] = false;
-  out["fill"] = nullptr;
-  out["surfels"] = surfels;
-  return out;
+RunReport WithoutFillReport(RunReport report, const SurfelReport& surfels) {
+  report.config.stereo_fill = false;
+  report.fill.reset();
+  report.surfels = surfels;
+  return report;
 }
 
 }  // namespace
@@ -323,10 +308,10 @@ void Reconstruction::CompleteKeyframes(const Stages& s, RunSink* sink,
   const ModelCompletionReport record =
       CompleteFromMap(*s.fill, s.fusion.get(), CorrectedTrajectory(s.tracker->record(), s.corrections),
                       s.tracker->record().names, sink, stop, &warnings);
-  summary->report["fill"]["model_completion"] = record;
+  summary->report.fill->model_completion = record;
   for (const std::string& w : warnings) {
     summary->warnings.push_back(w);
-    summary->report["warnings"].push_back(w);
+    summary->report.warnings.push_back(w);
   }
   if (record.stopped)
     MarkIncomplete(stop_reason,
@@ -358,14 +343,21 @@ void WriteRunCamera(FrameSource& source, RunSink* sink, RunSink* without_fill) {
 
 }  // namespace
 
-nlohmann::ordered_json Reconstruction::CpuReportOf(const Stages& s, double process_cpu_s,
-                                                   double seconds) {
-  return CpuReport({{"read", s.reader->cpu_seconds()},
-                    {"track", s.tracker->cpu_seconds()},
-                    {"fill", s.fill ? s.fill->cpu_seconds() : 0.0},
-                    {"fusion", s.fusion ? s.fusion->cpu_seconds() : 0.0},
-                    {"loop_closure", s.loop ? s.loop->cpu_seconds() : 0.0}},
-                   process_cpu_s, seconds);
+CpuSecondsReport Reconstruction::CpuReportOf(const Stages& s, double process_cpu_s,
+                                             double seconds) {
+  CpuSecondsReport c;
+  c.stages = {{"read", s.reader->cpu_seconds()},
+              {"track", s.tracker->cpu_seconds()},
+              {"fill", s.fill ? s.fill->cpu_seconds() : 0.0},
+              {"fusion", s.fusion ? s.fusion->cpu_seconds() : 0.0},
+              {"loop_closure", s.loop ? s.loop->cpu_seconds() : 0.0}};
+  double own = 0;
+  for (const auto& [name, cpu] : c.stages) own += cpu;
+  c.other = std::max(0.0, process_cpu_s - own);
+  c.process = process_cpu_s;
+  c.cores_used = seconds > 0 ? process_cpu_s / seconds : 0.0;
+  c.cores = std::thread::hardware_concurrency();
+  return c;
 }
 
 ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
@@ -419,12 +411,11 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
     error = std::make_exception_ptr(InputError(source.Input(), "no frames in the selected range"));
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   ReconstructionSummary summary = Summarise(source, *s, error, stop_reason, seconds);
-  summary.report["stages"]["cpu_seconds"] =
-      CpuReportOf(*s, ProcessCpuSeconds() - cpu_start, seconds);
-  summary.report["stages"]["peak_resident_mib"] = PeakResidentMiB();
+  summary.report.stages.cpu_seconds = CpuReportOf(*s, ProcessCpuSeconds() - cpu_start, seconds);
+  summary.report.stages.peak_resident_mib = PeakResidentMiB();
   if (!summary.complete && summary.stopped_during.empty())
     summary.stopped_during = error ? error_phase : stop_phase;
-  if (!summary.complete) summary.report["stopped_during"] = summary.stopped_during;
+  if (!summary.complete) summary.report.stopped_during = summary.stopped_during;
   if (without_fill) {
     const SurfelReport without = s->fusion->Report(1);
     summary.surfels_without_fill = without.count;
@@ -436,8 +427,8 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   // The whole run, the map's completion of the keyframes included.
   summary.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   summary.fps = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
-  summary.report["seconds"] = summary.seconds;
-  summary.report["fps"] = summary.fps;
+  summary.report.seconds = summary.seconds;
+  summary.report.fps = summary.fps;
   WriteFinalReports(callbacks, sink, without_fill, &summary);
   poll();
   if (error) std::rethrow_exception(error);
@@ -452,14 +443,15 @@ void Reconstruction::WriteFinalReports(const ReconstructionCallbacks& callbacks,
       callbacks.finish(summary->report);
     } catch (const std::exception& e) {
       summary->warnings.push_back(e.what());
-      summary->report["warnings"].push_back(e.what());
+      summary->report.warnings.push_back(e.what());
       spdlog::warn("{}", e.what());
     }
   }
   if (without_fill) {
     // The same end as the run's: complete, or stopped and why.
-    for (const char* key : {"complete", "stopped_because", "stopped_during"})
-      if (summary->report.contains(key)) summary->report_without_fill[key] = summary->report[key];
+    summary->report_without_fill.complete = summary->report.complete;
+    summary->report_without_fill.stopped_because = summary->report.stopped_because;
+    summary->report_without_fill.stopped_during = summary->report.stopped_during;
     without_fill->WriteReport(summary->report_without_fill);
   }
   sink->WriteReport(summary->report);

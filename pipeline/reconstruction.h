@@ -38,7 +38,6 @@
 #include <exception>
 #include <functional>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -47,6 +46,7 @@
 #include "pipeline/fill_stage.h"
 #include "pipeline/fusion_stage.h"
 #include "pipeline/loop_stage.h"
+#include "pipeline/run_report.h"
 #include "pipeline/run_sink.h"
 #include "registration/tracker.h"
 
@@ -94,7 +94,7 @@ struct ReconstructionCallbacks {
   // Once a complete run's other outputs are written, before its report.json (the last file):
   // outputs made from the finished run (a mesh, report.html), given the report about to be
   // written. What it throws becomes a warning in that report.
-  std::function<void(const nlohmann::ordered_json& report)> finish;
+  std::function<void(const RunReport& report)> finish;
 };
 
 // A run that loses tracking on more than this share of its frames has no usable trajectory.
@@ -117,8 +117,8 @@ struct ReconstructionSummary {
   double fps = 0;          // frames / seconds
   bool most_lost = false;  // tracking was lost on more than kMostFramesLost of the frames
   std::vector<std::string> warnings;           // also in the report
-  nlohmann::ordered_json report;               // report.json as written
-  nlohmann::ordered_json report_without_fill;  // ... in the without_fill folder, when there is one
+  RunReport report;               // report.json as written
+  RunReport report_without_fill;  // ... in the without_fill folder, when there is one
   long surfels_without_fill = 0;
   int loops = 0;  // loop edges in the optimised pose graph
   std::string BriefReport() const;
@@ -141,7 +141,7 @@ class Reconstruction {
   std::unique_ptr<Stages> MakeStages(FrameSource& source, RunSink* sink, RunSink* without_fill,
                                      bool live) const;
   // report.json's stages.cpu_seconds: each stage's threads, the process's, the cores used.
-  static nlohmann::ordered_json CpuReportOf(const Stages& s, double process_cpu_s, double seconds);
+  static CpuSecondsReport CpuReportOf(const Stages& s, double process_cpu_s, double seconds);
   ReconstructionSummary Summarise(const FrameSource& source, const Stages& s,
                                   const std::exception_ptr& error, const std::string& stop_reason,
                                   double seconds) const;

@@ -166,8 +166,8 @@ TEST(Reconstruction, TheMapCompletesEachKeyframeFromItsFills) {
   InMemoryRunSink sink;
   const ReconstructionSummary s = Reconstruction({}).Run(source, &sink);
   ASSERT_TRUE(s.complete);
-  const nlohmann::ordered_json& record = sink.report["fill"]["model_completion"];
-  ASSERT_TRUE(record.is_object()) << sink.report["fill"].dump(2);
+  ASSERT_TRUE(sink.report.fill && sink.report.fill->model_completion);
+  const ModelCompletionReport& record = *sink.report.fill->model_completion;
   long completed = 0, good = 0, outside_holes = 0, in_shadows = 0;
   std::vector<std::pair<float, bool>> confidence_good;  // per completed pixel
   for (const auto& [name, k] : sink.keyframes) {
@@ -200,10 +200,10 @@ TEST(Reconstruction, TheMapCompletesEachKeyframeFromItsFills) {
   upper /= std::max<size_t>(confidence_good.size() - half, 1);
   std::printf("model completion: %ld pixels of %d keyframes, %.1f%% within 3%% (upper half of "
               "the confidence %.1f%%, lower %.1f%%)\n",
-              completed, record["keyframes"].get<int>(), completed ? 100.0 * good / completed : 0.0,
+              completed, record.keyframes, completed ? 100.0 * good / completed : 0.0,
               100 * upper, 100 * lower);
   EXPECT_GT(upper, lower + 0.05);
-  EXPECT_EQ(completed, record["pixels"].get<long>());
+  EXPECT_EQ(completed, record.pixels);
   EXPECT_GT(completed, 200);
   EXPECT_EQ(outside_holes, 0);
   EXPECT_EQ(in_shadows, 0);  // the near object's fill spread past its edge would land there
@@ -214,7 +214,7 @@ TEST(Reconstruction, TheMapCompletesEachKeyframeFromItsFills) {
   // the few tenths that another CPU's SIMD paths (OpenCV's dispatch) may move it, not for a
   // completion that is worse.
   EXPECT_GT(good, 0.88 * completed);
-  EXPECT_FALSE(record["stopped"].get<bool>());
+  EXPECT_FALSE(record.stopped);
 }
 
 // A sink whose keyframe writes take `delay`: the fill stage falls far behind tracking and fusion.
@@ -245,7 +245,8 @@ TEST(Reconstruction, ARecordedCaptureGivesTheSameOutputsHoweverFastEachStageRuns
   const ReconstructionSummary b = Reconstruction({}).Run(source, &second);
   ASSERT_TRUE(a.complete && b.complete);
   EXPECT_GT(a.filled_pixels, 0);
-  EXPECT_GT(first.report["fill"]["model_completion"]["pixels"].get<long>(), 0);
+  ASSERT_TRUE(first.report.fill && first.report.fill->model_completion);
+  EXPECT_GT(first.report.fill->model_completion->pixels, 0);
   testing::ExpectSameRun(first, second);
 }
 
@@ -259,10 +260,11 @@ TEST(Reconstruction, AFillFailureIsContained) {
   const ReconstructionSummary s = Reconstruction({}).Run(source, &sink);
   EXPECT_TRUE(s.complete);
   EXPECT_EQ(s.frames, 30);
-  const nlohmann::ordered_json& failed = sink.report["fill"]["failed_keyframes"];
-  ASSERT_EQ(failed.size(), 1u) << sink.report["fill"].dump(2);
-  EXPECT_EQ(failed[0]["timestamp"], "0");
-  EXPECT_EQ(sink.report["fill"]["keyframes_filled"], s.keyframes);
+  ASSERT_TRUE(sink.report.fill);
+  const std::vector<FailedKeyframe>& failed = sink.report.fill->failed_keyframes;
+  ASSERT_EQ(failed.size(), 1u) << nlohmann::ordered_json(*sink.report.fill).dump(2);
+  EXPECT_EQ(failed[0].timestamp, "0");
+  EXPECT_EQ(sink.report.fill->keyframes_filled, s.keyframes);
   EXPECT_GT(s.filled_pixels, 0);
   ASSERT_EQ(s.warnings.size(), 1u);
   EXPECT_NE(s.warnings[0].find("keyframe 0 not filled"), std::string::npos);
@@ -308,12 +310,12 @@ TEST(Reconstruction, AStopRequestEndsTheRunEarly) {
   const ReconstructionSummary s = Reconstruction({}).Run(source, &sink, callbacks);
   EXPECT_FALSE(s.complete);
   EXPECT_EQ(s.stopped_because, "stopped by the test");
-  EXPECT_FALSE(sink.report["complete"].get<bool>());
-  EXPECT_EQ(sink.report["stopped_because"], "stopped by the test");
+  EXPECT_FALSE(sink.report.complete);
+  EXPECT_EQ(sink.report.stopped_because, "stopped by the test");
   EXPECT_GE(s.frames, 5);
   EXPECT_EQ(sink.trajectory.size(), static_cast<size_t>(s.frames));
-  const auto& fill = sink.report["fill"];
-  EXPECT_LE(fill["keyframes_filled"].get<int>() + fill["keyframes_not_filled"].get<int>(),
+  ASSERT_TRUE(sink.report.fill);
+  EXPECT_LE(sink.report.fill->keyframes_filled + sink.report.fill->keyframes_not_filled,
             s.keyframes);
 }
 
@@ -329,10 +331,10 @@ class RecordingSink : public InMemoryRunSink {
     Note("trajectory");
     InMemoryRunSink::WriteTrajectory(trajectory);
   }
-  void WriteReport(const nlohmann::ordered_json& report) override {
+  void WriteReport(const RunReport& report) override {
     Note("report");
     std::lock_guard<std::mutex> lock(mutex_);
-    reports_complete.push_back(report["complete"].get<bool>());
+    reports_complete.push_back(report.complete);
     InMemoryRunSink::WriteReport(report);
   }
   void WriteMap(const std::vector<Surfel>& surfels) override {
@@ -369,8 +371,8 @@ TEST(Reconstruction, TheReportIsWrittenLastAndSaysCompleteOnlyThen) {
   RecordingSink sink;
   ReconstructionCallbacks callbacks;
   bool finished = false;
-  callbacks.finish = [&](const nlohmann::ordered_json& report) {
-    EXPECT_TRUE(report["complete"].get<bool>());
+  callbacks.finish = [&](const RunReport& report) {
+    EXPECT_TRUE(report.complete);
     EXPECT_GT(sink.completed_calls.load(), 0);  // after the completion from the map
     finished = true;
     throw std::runtime_error("report.html not written: a test");
@@ -384,7 +386,8 @@ TEST(Reconstruction, TheReportIsWrittenLastAndSaysCompleteOnlyThen) {
   for (size_t i = 0; i + 1 < sink.reports_complete.size(); ++i)
     EXPECT_FALSE(sink.reports_complete[i]) << "report " << i << " said complete too early";
   EXPECT_TRUE(sink.reports_complete.back());
-  EXPECT_EQ(sink.report["warnings"].back(), "report.html not written: a test");
+  ASSERT_FALSE(sink.report.warnings.empty());
+  EXPECT_EQ(sink.report.warnings.back(), "report.html not written: a test");
 }
 
 // A stop request while the keyframes are being completed from the map: not complete, and the
@@ -397,16 +400,17 @@ TEST(Reconstruction, AStopDuringTheMapCompletionLeavesTheRunIncomplete) {
     return sink.completed_calls >= 1 ? "stopped by the test" : "";
   };
   bool finished = false;
-  callbacks.finish = [&](const nlohmann::ordered_json&) { finished = true; };
+  callbacks.finish = [&](const RunReport&) { finished = true; };
   const ReconstructionSummary s = Reconstruction({}).Run(source, &sink, callbacks);
   EXPECT_FALSE(s.complete);
   EXPECT_FALSE(s.refused);
   EXPECT_FALSE(finished);
   EXPECT_EQ(s.stopped_because, "stopped by the test");
   EXPECT_EQ(s.stopped_during.rfind("map completion", 0), 0u) << s.stopped_during;
-  EXPECT_FALSE(sink.report["complete"].get<bool>());
-  EXPECT_EQ(sink.report["stopped_during"], s.stopped_during);
-  EXPECT_TRUE(sink.report["fill"]["model_completion"]["stopped"].get<bool>());
+  EXPECT_FALSE(sink.report.complete);
+  EXPECT_EQ(sink.report.stopped_during, s.stopped_during);
+  ASSERT_TRUE(sink.report.fill && sink.report.fill->model_completion);
+  EXPECT_TRUE(sink.report.fill->model_completion->stopped);
   for (bool complete : sink.reports_complete) EXPECT_FALSE(complete);
 }
 
@@ -428,7 +432,7 @@ TEST(Reconstruction, ARunThatLosesTrackingIsRefusedUnlessAllowed) {
   EXPECT_TRUE(s.refused && !s.complete);
   EXPECT_NE(s.stopped_because.find("tracking was lost on 7 of 8 frames"), std::string::npos)
       << s.stopped_because;
-  EXPECT_FALSE(sink.report["complete"].get<bool>());
+  EXPECT_FALSE(sink.report.complete);
   options.allow_lost = true;  // accepted, with a warning
   InMemoryFrameSource again(GlassTable().camera, blind);
   EXPECT_TRUE(Reconstruction(options).Run(again, &sink).complete);

@@ -10,12 +10,12 @@ bool RunReader::Has(const std::string& relative) const {
   return IsRegularFile(layout_.Path(relative));
 }
 
-nlohmann::ordered_json RunReader::Report() const {
+RunReport RunReader::Report() const {
   const std::string path = layout_.Path(RunLayout::kReport);
   try {
-    return nlohmann::ordered_json::parse(ReadTextFile(path));
+    return nlohmann::ordered_json::parse(ReadTextFile(path)).get<RunReport>();
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(path, std::string("not valid JSON: ") + e.what());
+    throw InputError(path, std::string("not a run's report: ") + e.what());
   }
 }
 

@@ -3,7 +3,6 @@
 // run's outputs through it; the evaluation (eval/, below pipeline/) reads them through RunLayout.
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
@@ -11,6 +10,7 @@
 #include "acquisition/camera.h"
 #include "acquisition/run_layout.h"
 #include "acquisition/trajectory.h"
+#include "pipeline/run_report.h"
 #include "surfels/surfel_map.h"
 
 namespace gf {
@@ -27,7 +27,7 @@ class RunReader {
   // run stopped early may lack its trajectory.
   bool Has(const std::string& relative) const;
   // Each throws InputError when its file is absent or unreadable.
-  nlohmann::ordered_json Report() const;  // report.json
+  RunReport Report() const;               // report.json
   Trajectory Poses() const;               // trajectory.txt: every frame's world_from_camera
   Camera ImageCamera() const;             // camera.json: the camera of keyframes/
   std::vector<Surfel> Map() const;        // map.ply

@@ -240,8 +240,8 @@ void FolderRunSink::WriteCamera(const CameraFile& camera) {
                           open3d.dump(2) + "\n");
 }
 
-void FolderRunSink::WriteReport(const nlohmann::ordered_json& report) {
-  WriteTextFileAtomically(File(RunLayout::kReport), JsonText(report) + "\n");
+void FolderRunSink::WriteReport(const RunReport& report) {
+  WriteTextFileAtomically(File(RunLayout::kReport), JsonText(nlohmann::ordered_json(report)) + "\n");
 }
 
 void FolderRunSink::WriteMap(const std::vector<Surfel>& surfels) {
@@ -288,7 +288,7 @@ void InMemoryRunSink::WriteCamera(const CameraFile& c) {
   camera = c;
 }
 
-void InMemoryRunSink::WriteReport(const nlohmann::ordered_json& r) {
+void InMemoryRunSink::WriteReport(const RunReport& r) {
   std::lock_guard<std::mutex> lock(mutex_);
   report = r;
 }

@@ -28,7 +28,6 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -37,6 +36,7 @@
 #include "acquisition/run_folder.h"
 #include "acquisition/trajectory.h"
 #include "fill/fill_carry.h"
+#include "pipeline/run_report.h"
 #include "surfels/surfel_map.h"
 
 namespace gf {
@@ -66,7 +66,7 @@ class RunSink {
                              const CarriedFillResult& fill) = 0;
   virtual void WriteTrajectory(const Trajectory& trajectory) = 0;
   virtual void WriteCamera(const CameraFile& camera) = 0;
-  virtual void WriteReport(const nlohmann::ordered_json& report) = 0;
+  virtual void WriteReport(const RunReport& report) = 0;  // report.json
   // map.ply (surfels/ply.h): the stable surfels of the run's surfel map.
   virtual void WriteMap(const std::vector<Surfel>& surfels) = 0;
   // Completes keyframe `name` (written before) from the map: its hole pixels that its filled
@@ -102,7 +102,7 @@ class FolderRunSink : public RunSink {
                      const CarriedFillResult& fill) override;
   void WriteTrajectory(const Trajectory& trajectory) override;
   void WriteCamera(const CameraFile& camera) override;
-  void WriteReport(const nlohmann::ordered_json& report) override;
+  void WriteReport(const RunReport& report) override;
   void WriteMap(const std::vector<Surfel>& surfels) override;
   // Rewrites <name>.depth_filled.png and the pinhole depth, and writes <name>.model_fill.png (255
   // where the model completed the keyframe) and, when the offer has one, <name>.glass_mask.png.
@@ -142,7 +142,7 @@ class InMemoryRunSink : public RunSink {
                      const CarriedFillResult& fill) override;
   void WriteTrajectory(const Trajectory& trajectory) override;
   void WriteCamera(const CameraFile& camera) override;
-  void WriteReport(const nlohmann::ordered_json& report) override;
+  void WriteReport(const RunReport& report) override;
   void WriteMap(const std::vector<Surfel>& surfels) override;
   int CompleteKeyframe(const std::string& name, const MapCompletion& offer) override;
   std::string Where() const override { return "memory"; }
@@ -151,7 +151,7 @@ class InMemoryRunSink : public RunSink {
   std::map<std::string, Keyframe> keyframes;
   Trajectory trajectory;
   CameraFile camera;
-  nlohmann::ordered_json report;
+  RunReport report;
   std::vector<Surfel> map;
   bool map_written = false;
 

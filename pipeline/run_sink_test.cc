@@ -26,9 +26,47 @@ void Touch(const std::string& path, const std::string& text) {
   std::ofstream(path) << text;
 }
 
+RunReport Complete() {
+  RunReport report;
+  report.complete = true;
+  return report;
+}
+
+// A report with every section: each kind of field set to something other than its default.
+RunReport Rich() {
+  RunReport r = Complete();
+  r.input = {"capture", "tum", 2, 40};
+  r.config.stereo_fill = r.config.surfel_fusion = r.config.loop_closure = true;
+  r.config.file = "settings.json";
+  r.config.settings = {{"fill", {{"pairs", {{"lookahead", 3}}}}}};
+  r.frames = 1;
+  r.fps = 12.5;
+  r.stages.steps = {{"read", StepTimes::Of({1.5, 2.5})}, {"stereo", StepTimes::Of({})}};
+  r.stages.cpu_seconds = CpuSecondsReport{{{"read", 0.25}, {"fill", 1.0}}, 0.5, 1.75, 0.9, 2};
+  r.stages.peak_resident_mib = 300.5;
+  r.tracking.lost = {"1.5"};
+  r.loops.enabled = true;
+  r.loops.refused = {{"too few inliers", 2}};
+  r.loops.loops = {{"5.0", "1.0", true}};
+  KeyframeFill k;
+  k.timestamp = "1.5";
+  k.partner = "2.5";
+  k.path = "plane_sweep_forward";
+  k.hole_pixels = 10;
+  k.filled_pixels = 4;
+  r.fill = FillReport::Of({k}, 1, 0);
+  r.fill->model_completion = ModelCompletionReport{1, 3, 0.5, false, 1, 1, 0, 0};
+  r.surfels = SurfelReport();
+  r.surfels->by_source = {{"sensor", 7}, {"stereo_fill", 2}};
+  r.surfels->count_over_time = {{10, 9, 7, 2, 1}};
+  r.surfels->first_failure = "a test";
+  r.warnings = {"a warning"};
+  return r;
+}
+
 // What a run writes without any frames: its report and an empty map.
 void WriteSomething(RunSink* sink) {
-  sink->WriteReport({{"complete", true}});
+  sink->WriteReport(Complete());
   sink->WriteMap({});
 }
 
@@ -60,10 +98,11 @@ TEST(RunReader, ReadsBackWhatTheFolderSinkWrote) {
     s.radius = 0.01f;
     s.confidence = 5;
     sink.WriteMap({s, s});
-    sink.WriteReport({{"complete", true}, {"frames", 1}});
+    sink.WriteReport(Rich());
   }
   const RunReader reader(run);
-  EXPECT_EQ(reader.Report()["frames"], 1);
+  // report.json reads back as the report written, every field.
+  EXPECT_EQ(nlohmann::ordered_json(reader.Report()).dump(2), nlohmann::ordered_json(Rich()).dump(2));
   ASSERT_EQ(reader.Poses().size(), 1u);
   EXPECT_EQ(reader.Poses()[0].timestamp_text, "1.500000");
   EXPECT_NEAR(reader.Poses()[0].world_from_camera.translation().z(), 0.3, 1e-9);
@@ -115,7 +154,7 @@ TEST(FolderRunSink, NeverOverwritesAFileItDidNotWrite) {
   const std::string run = dir / "run";
   {
     FolderRunSink sink(run, false);
-    sink.WriteReport({{"complete", true}});
+    sink.WriteReport(Complete());
   }
   Touch(run + "/map.ply", "the user's own model");
   FolderRunSink sink(run, true);

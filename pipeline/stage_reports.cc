@@ -3,26 +3,15 @@
 #include <algorithm>
 
 #include "acquisition/stats.h"
+#include "pipeline/json_fields.h"
 
 namespace gf {
 namespace {
 
 using json = nlohmann::ordered_json;
-
-template <typename T>
-json OrNull(const std::optional<T>& value) {
-  return value ? json(*value) : json();
-}
-
-json OrNull(const std::string& name) { return name.empty() ? json() : json(name); }
-
-// `pairs` as one object, in their order.
-template <typename T>
-json Object(const std::vector<std::pair<std::string, T>>& pairs) {
-  json out = json::object();
-  for (const auto& [name, value] : pairs) out[name] = value;
-  return out;
-}
+using json_fields::Object;
+using json_fields::OrNull;
+using json_fields::Read;
 
 // One more of `name` in `counts` (added at the end when new).
 void Count(const std::string& name, std::vector<std::pair<std::string, int>>* counts) {
@@ -44,6 +33,12 @@ StepTimes StepTimes::Of(std::vector<double> ms) {
   t.median_ms = ms[ms.size() / 2];
   t.max_ms = ms.back();
   return t;
+}
+
+long SurfelReport::StableFrom(const std::string& source) const {
+  for (const auto& [name, count] : by_source)
+    if (name == source) return count;
+  return 0;
 }
 
 FillReport FillReport::Of(const std::vector<KeyframeFill>& keyframes, int dropped,
@@ -211,6 +206,134 @@ void to_json(json& j, const LoopReport& l) {
         {{"attempts", l.relocalisation_attempts}, {"found", l.relocalised}}},
        {"database_bytes", l.database_bytes},
        {"loops", l.loops}};
+}
+
+void from_json(const json& j, StepTimes& t) {
+  Read(j, "median_ms", &t.median_ms);
+  Read(j, "max_ms", &t.max_ms);
+  Read(j, "count", &t.count);
+}
+
+void from_json(const json& j, FailedKeyframe& f) {
+  Read(j, "timestamp", &f.timestamp);
+  Read(j, "reason", &f.reason);
+}
+
+void from_json(const json& j, ModelCompletionReport& m) {
+  Read(j, "keyframes", &m.keyframes);
+  Read(j, "pixels", &m.pixels);
+  Read(j, "seconds", &m.seconds);
+  Read(j, "stopped", &m.stopped);
+  Read(j, "keyframes_done", &m.keyframes_done);
+  Read(j, "keyframes_to_do", &m.keyframes_to_do);
+  Read(j, "glass_keyframes", &m.glass_keyframes);
+  Read(j, "glass_pixels", &m.glass_pixels);
+}
+
+void from_json(const json& j, KeyframeFill& k) {
+  Read(j, "timestamp", &k.timestamp);
+  Read(j, "partner", &k.partner);
+  Read(j, "baseline_m", &k.baseline_m);
+  Read(j, "matches", &k.matches);
+  Read(j, "third", &k.third);
+  Read(j, "third_view", &k.third_view);
+  Read(j, "method", &k.method);
+  Read(j, "path", &k.path);
+  Read(j, "sgbm_vertical", &k.sgbm_vertical);
+  Read(j, "hole_pixels", &k.hole_pixels);
+  Read(j, "filled_pixels", &k.filled_pixels);
+  Read(j, "carried_pixels", &k.carried_pixels);
+  Read(j, "corrected_pixels", &k.corrected_pixels);
+  Read(j, "witnesses", &k.witnesses);
+  Read(j, "corroborated_pixels", &k.corroborated_pixels);
+  Read(j, "seen_through_pixels", &k.seen_through_pixels);
+  Read(j, "stereo_error_median_m", &k.stereo_error_median_m);
+  Read(j, "ms", &k.ms);
+  Read(j, "termination", &k.termination);
+}
+
+void from_json(const json& j, FillReport& f) {
+  Read(j, "hole_pixels", &f.hole_pixels);
+  Read(j, "filled_pixels", &f.filled_pixels);
+  Read(j, "carried_pixels", &f.carried_pixels);
+  Read(j, "corrected_pixels", &f.corrected_pixels);
+  Read(j, "corroborated_pixels", &f.corroborated_pixels);
+  Read(j, "seen_through_pixels", &f.seen_through_pixels);
+  Read(j, "stereo_error_median_m", &f.stereo_error_median_m);
+  Read(j, "keyframes_filled", &f.keyframes_filled);
+  Read(j, "keyframes_paired", &f.keyframes_paired);
+  Read(j, "keyframes_dropped", &f.keyframes_dropped);
+  Read(j, "keyframes_not_filled", &f.keyframes_not_filled);
+  Read(j, "failed_keyframes", &f.failed_keyframes);
+  Read(j, "pair_paths", &f.pair_paths);
+  Read(j, "sgbm_refused", &f.sgbm_refused);
+  Read(j, "sgbm_rescaled", &f.sgbm_rescaled);
+  Read(j, "sgbm_vertical", &f.sgbm_vertical);
+  Read(j, "pair_median_ms", &f.pair_median_ms);
+  Read(j, "pair_max_ms", &f.pair_max_ms);
+  Read(j, "per_keyframe", &f.per_keyframe);
+  Read(j, "model_completion", &f.model_completion);
+}
+
+void from_json(const json& j, SurfelCountAt& c) {
+  Read(j, "frame", &c.frame);
+  Read(j, "stable", &c.stable);
+  Read(j, "sensor", &c.sensor);
+  Read(j, "stereo_fill", &c.stereo_fill);
+  Read(j, "unstable", &c.unstable);
+}
+
+void from_json(const json& j, SurfelReport& s) {
+  Read(j, "count", &s.count);
+  Read(j, "by_source", &s.by_source);
+  Read(j, "area_m2", &s.area_m2);
+  Read(j, "unstable", &s.unstable);
+  Read(j, "bytes_per_surfel", &s.bytes_per_surfel);
+  Read(j, "memory_bytes", &s.memory_bytes);
+  Read(j, "count_over_time", &s.count_over_time);
+  Read(j, "variant", &s.variant);
+  Read(j, "fills_fused", &s.fills_fused);
+  Read(j, "frame_ms", &s.frame_ms);
+  Read(j, "fill_ms", &s.fill_ms);
+  Read(j, "merged_as_copies", &s.merged_as_copies);
+  Read(j, "budget", &s.budget);
+  Read(j, "removed_over_budget", &s.removed_over_budget);
+  Read(j, "failed_frames", &s.failed_frames);
+  Read(j, "failed_fills", &s.failed_fills);
+  Read(j, "first_failure", &s.first_failure);
+  Read(j, "dropped_items", &s.dropped_items);
+  Read(j, "corrections_applied", &s.corrections_applied);
+}
+
+void from_json(const json& j, AcceptedLoop& l) {
+  Read(j, "keyframe", &l.keyframe);
+  Read(j, "with", &l.with);
+  Read(j, "correction", &l.correction);
+}
+
+void from_json(const json& j, LoopReport& l) {
+  Read(j, "enabled", &l.enabled);
+  Read(j, "keyframes", &l.keyframes);
+  Read(j, "keyframes_dropped", &l.keyframes_dropped);
+  Read(j, "keyframes_stored", &l.keyframes_stored);
+  Read(j, "keyframes_same_place", &l.keyframes_same_place);
+  Read(j, "keyframes_held", &l.keyframes_held);
+  Read(j, "keyframes_failed", &l.keyframes_failed);
+  Read(j, "candidates", &l.candidates);
+  Read(j, "verified", &l.verified);
+  Read(j, "accepted", &l.accepted);
+  Read(j, "rejected_by_graph", &l.rejected_by_graph);
+  Read(j, "pending_when_seen", &l.pending_when_seen);
+  Read(j, "refused", &l.refused);
+  Read(j, "optimisations", &l.optimisations);
+  Read(j, "optimisation_ms", &l.optimisation_ms);
+  Read(j, "keyframe_ms", &l.keyframe_ms);
+  if (j.contains("relocalisation")) {
+    Read(j["relocalisation"], "attempts", &l.relocalisation_attempts);
+    Read(j["relocalisation"], "found", &l.relocalised);
+  }
+  Read(j, "database_bytes", &l.database_bytes);
+  Read(j, "loops", &l.loops);
 }
 
 }  // namespace gf

@@ -1,10 +1,11 @@
 // What each stage of a run reports, as types: the fill stage's FillReport, the fusion stage's
 // SurfelReport, the loop-closure stage's LoopReport, the map's completion of the keyframes
 // (ModelCompletionReport) and the steps' times (StepTimes). The stages return these; the run reads
-// their fields (Reconstruction::Summarise) and report.json holds them as JSON, written by the
-// to_json functions of stage_reports.cc alone (nlohmann::json finds them by argument-dependent
-// lookup, so `json(report)` writes one). DESIGN.md names report.json's keys; they are the fields'
-// names here.
+// their fields (Reconstruction::Summarise) and report.json holds them (pipeline/run_report.h),
+// written and read back by the to_json and from_json functions of stage_reports.cc alone
+// (nlohmann::json finds them by argument-dependent lookup: `json(report)` writes one,
+// `j.get<FillReport>()` reads one; a key absent from an older report leaves its field's default).
+// DESIGN.md names report.json's keys; they are the fields' names here.
 #pragma once
 
 #include <cstddef>
@@ -93,6 +94,7 @@ struct SurfelReport {
   std::optional<std::string> first_failure;  // what the first failed item threw
   int dropped_items = 0;                     // live input: found the queue full
   int corrections_applied = 0;               // loop corrections the map followed
+  long StableFrom(const std::string& source) const;  // by_source's count (0 when not there)
 };
 
 // A loop the pose graph accepted: the keyframe, the one it closed with, and whether the edges
@@ -125,5 +127,15 @@ void to_json(nlohmann::ordered_json& j, const SurfelCountAt& c);
 void to_json(nlohmann::ordered_json& j, const SurfelReport& s);
 void to_json(nlohmann::ordered_json& j, const AcceptedLoop& l);
 void to_json(nlohmann::ordered_json& j, const LoopReport& l);
+
+void from_json(const nlohmann::ordered_json& j, StepTimes& t);
+void from_json(const nlohmann::ordered_json& j, FailedKeyframe& f);
+void from_json(const nlohmann::ordered_json& j, ModelCompletionReport& m);
+void from_json(const nlohmann::ordered_json& j, KeyframeFill& k);
+void from_json(const nlohmann::ordered_json& j, FillReport& f);
+void from_json(const nlohmann::ordered_json& j, SurfelCountAt& c);
+void from_json(const nlohmann::ordered_json& j, SurfelReport& s);
+void from_json(const nlohmann::ordered_json& j, AcceptedLoop& l);
+void from_json(const nlohmann::ordered_json& j, LoopReport& l);
 
 }  // namespace gf

@@ -61,7 +61,7 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
   const RunLayout folder(out_dir), with_fill = folder.Map(true), without_fill = folder.Map(false);
   const json c = json::parse(ReadTextFile(folder.Path(RunLayout::kCompare)));
   const RunReader with_fill_run(with_fill);
-  const json run = with_fill_run.Report();
+  const RunReport run = with_fill_run.Report();
   const std::string input = c["input"];
   const Trajectory estimate = with_fill_run.Poses();
   const std::string truth_file = GroundTruthBeside(input);
@@ -73,8 +73,7 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
                RunSummaryText(run, c.contains("ate_m") ? &ate : nullptr));
   r->Heading("The two models");
   const StampedPose& middle = estimate[estimate.size() / 2];
-  const int middle_index =
-      run["input"].value("first_frame", 0) + static_cast<int>(estimate.size() / 2);
+  const int middle_index = run.input.first_frame + static_cast<int>(estimate.size() / 2);
   r->Images(
       Renderings(out_dir, prefix, FrameLabel(IndexedFileName(middle_index, middle.timestamp_text))),
       440);
@@ -111,16 +110,16 @@ void AddComparisonSections(HtmlReport* r, const std::string& out_dir, const std:
                    " mm (" + std::to_string(a["transparent_surfels"].get<long>()) + " surfels).");
   }
   std::vector<std::vector<std::string>> sizes;
+  std::vector<std::pair<std::string, SurfelReport>> maps;
   for (const char* v : {"with_fill", "without_fill"}) {
-    const json& s = c[v]["surfels"];
-    sizes.push_back({v, std::to_string(s["count"].get<long>()),
-                     std::to_string(s["by_source"]["sensor"].get<long>()),
-                     std::to_string(s["by_source"]["stereo_fill"].get<long>()),
-                     std::to_string(s["by_source"].value("transparent", 0L))});
+    const SurfelReport s = c[v]["surfels"].get<SurfelReport>();
+    sizes.push_back({v, std::to_string(s.count), std::to_string(s.StableFrom("sensor")),
+                     std::to_string(s.StableFrom("stereo_fill")),
+                     std::to_string(s.StableFrom("transparent"))});
+    maps.push_back({maps.empty() ? "with the fill" : "without", s});
   }
   r->Table({"map", "surfels", "from the sensor", "from the stereo fill", "transparent"}, sizes);
-  AddSurfelCountFigure(
-      r, {{"with the fill", c["with_fill"]["surfels"]}, {"without", c["without_fill"]["surfels"]}});
+  AddSurfelCountFigure(r, maps);
   r->Heading("Trajectory");
   AddTrajectoryFigure(r, estimate, c.contains("ate_m") ? truth : Trajectory());
   r->Heading("Stereo fill");

@@ -24,18 +24,6 @@ std::string& StoredCommandLine() {
   return line;
 }
 
-// report.json's number at `key`, or `otherwise` where it is missing or null (a stage that did not
-// run, a run without fill).
-double NumberAt(const json& object, const char* key, double otherwise = 0) {
-  return object.is_object() && object.contains(key) && object[key].is_number()
-             ? object[key].get<double>()
-             : otherwise;
-}
-
-std::string Count(const json& object, const char* key) {
-  return std::to_string(static_cast<long>(NumberAt(object, key)));
-}
-
 std::string Format(const char* format, double value) {
   char buffer[64];
   std::snprintf(buffer, sizeof(buffer), format, value);
@@ -98,22 +86,20 @@ std::string FrameLabel(const std::string& file) {
          " (t = " + stamp + " s)";
 }
 
-std::string RunSummaryText(const json& report, const double* ate_m) {
-  std::string text = Count(report, "frames") + " frames in " +
-                     Format("%.1f", NumberAt(report, "seconds")) + " s (" +
-                     Format("%.1f", NumberAt(report, "fps")) + " fps over the whole run), " +
-                     Count(report, "keyframes") + " keyframes";
-  if (report.contains("tracking"))
-    text += ", " + Count(report["tracking"], "lost_frames") + " frames lost";
-  if (report.contains("loops") && report["loops"].is_object() &&
-      report["loops"].value("enabled", false))
-    text += "; " + Count(report["loops"], "accepted") + " loops accepted";
-  if (report.contains("fill") && report["fill"].is_object())
-    text += "; " + Format("%.1f", 100 * NumberAt(report["fill"], "fill_rate")) +
+std::string RunSummaryText(const RunReport& report, const double* ate_m) {
+  std::string text = std::to_string(report.frames) + " frames in " +
+                     Format("%.1f", report.seconds) + " s (" + Format("%.1f", report.fps) +
+                     " fps over the whole run), " + std::to_string(report.keyframes) +
+                     " keyframes";
+  text += ", " + std::to_string(report.tracking.lost_frames) + " frames lost";
+  if (report.loops.enabled)
+    text += "; " + std::to_string(report.loops.accepted) + " loops accepted";
+  if (report.fill)
+    text += "; " + Format("%.1f", 100 * report.fill->fill_rate()) +
             "% of the keyframes' hole pixels filled";
-  if (report.contains("surfels") && report["surfels"].is_object())
-    text += "; " + Count(report["surfels"], "count") + " surfels (" +
-            Count(report["surfels"]["by_source"], "stereo_fill") + " from the fill)";
+  if (report.surfels)
+    text += "; " + std::to_string(report.surfels->count) + " surfels (" +
+            std::to_string(report.surfels->StableFrom("stereo_fill")) + " from the fill)";
   if (ate_m) text += "; trajectory error (ATE) " + Format("%.2f", 100 * *ate_m) + " cm";
   return text + ".";
 }
@@ -151,15 +137,15 @@ void AddTrajectoryFigure(HtmlReport* r, const Trajectory& estimate, const Trajec
                       "motion); the input has no ground truth.");
 }
 
-void AddSurfelCountFigure(HtmlReport* r, const std::vector<std::pair<std::string, json>>& runs) {
+void AddSurfelCountFigure(HtmlReport* r,
+                          const std::vector<std::pair<std::string, SurfelReport>>& runs) {
   static const char* colors[] = {"#1b7837", "#762a83", "#2166ac", "#b2182b"};
   std::vector<PlotSeries> series;
   for (size_t i = 0; i < runs.size(); ++i) {
-    const json& surfels = runs[i].second;
-    if (!surfels.is_object() || !surfels.contains("count_over_time")) continue;
+    if (runs[i].second.count_over_time.empty()) continue;
     PlotSeries s{runs[i].first, colors[i % 4], {}};
-    for (const json& c : surfels["count_over_time"])
-      s.points.push_back({c["frame"].get<double>(), c["stable"].get<double>()});
+    for (const SurfelCountAt& c : runs[i].second.count_over_time)
+      s.points.push_back({static_cast<double>(c.frame), static_cast<double>(c.stable)});
     series.push_back(s);
   }
   if (series.empty()) return;
@@ -192,8 +178,8 @@ void AddFillOverlays(HtmlReport* r, const std::string& run_dir, const std::strin
   r->Images(images, 320);
 }
 
-void AddStageTimings(HtmlReport* r, const json& report) {
-  if (!report.contains("stages")) return;
+void AddStageTimings(HtmlReport* r, const RunReport& report) {
+  if (report.stages.steps.empty()) return;
   static const std::vector<std::pair<std::string, std::string>> meaning = {
       {"read", "reading and decoding a frame"},
       {"track", "tracking a frame"},
@@ -203,23 +189,21 @@ void AddStageTimings(HtmlReport* r, const json& report) {
       {"loop_closure", "loop search and pose graph, per keyframe"}};
   std::vector<std::vector<std::string>> rows;
   for (const auto& [name, what] : meaning) {
-    if (!report["stages"].contains(name)) continue;
-    const json& t = report["stages"][name];
-    if (NumberAt(t, "count") == 0) continue;
-    rows.push_back({name, what, Count(t, "count"), Format("%.1f", NumberAt(t, "median_ms")),
-                    Format("%.1f", NumberAt(t, "max_ms"))});
+    const StepTimes* t = report.stages.Find(name);
+    if (!t || t->count == 0) continue;
+    rows.push_back({name, what, std::to_string(t->count), Format("%.1f", t->median_ms.value_or(0)),
+                    Format("%.1f", t->max_ms.value_or(0))});
   }
   r->Table({"stage", "what", "count", "median ms", "max ms"}, rows);
   r->Paragraph("Each stage runs in its own thread; on " +
-               Count(report.value("config", json::object()), "hardware_concurrency") +
+               std::to_string(report.config.hardware_concurrency) +
                " cores they overlap, so the whole run's rate is not the sum.");
 }
 
-void AddSettings(HtmlReport* r, const json& report) {
+void AddSettings(HtmlReport* r, const RunReport& report) {
   if (!CommandLine().empty()) r->Details("the command that made this report", CommandLine());
-  if (report.contains("config"))
-    r->Details("every setting (report.json \"config\"; --config reads its \"settings\")",
-               JsonText(report["config"]));
+  r->Details("every setting (report.json \"config\"; --config reads its \"settings\")",
+             JsonText(json(report)["config"]));
 }
 
 void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& prefix) {
@@ -241,8 +225,8 @@ void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& 
   r->Links(links);
 }
 
-void WriteRunReport(const std::string& run_dir, const std::string& input, const json& report,
-                    const ReportFile& file) {
+void WriteRunReport(const std::string& run_dir, const std::string& input,
+                    const RunReport& report, const ReportFile& file) {
   const Trajectory estimate = RunReader(run_dir).Poses();
   const std::string truth_file = GroundTruthBeside(input);
   const Trajectory truth = truth_file.empty() ? Trajectory() : ReadTrajectory(truth_file);
@@ -252,9 +236,9 @@ void WriteRunReport(const std::string& run_dir, const std::string& input, const 
               RunSummaryText(report, ate.success ? &ate.ate_rmse_m : nullptr));
   r.Heading("Trajectory");
   AddTrajectoryFigure(&r, estimate, ate.success ? truth : Trajectory());
-  if (report.contains("surfels") && report["surfels"].is_object()) {
+  if (report.surfels) {
     r.Heading("The model");
-    AddSurfelCountFigure(&r, {{"surfels", report["surfels"]}});
+    AddSurfelCountFigure(&r, {{"surfels", *report.surfels}});
     AddMapView(&r, file, {{"the map", run_dir, ""}});
   }
   r.Heading("Stereo fill");

@@ -12,11 +12,11 @@
 // run folder seen from there: "" or "with_fill/").
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "acquisition/trajectory.h"
+#include "pipeline/run_report.h"
 #include "report/map_view.h"
 #include "report/report_html.h"
 
@@ -33,7 +33,7 @@ std::string FrameLabel(const std::string& file);
 // The keyframes of a run as undistorted/ names them (<index>_<ts>.png), in frame order.
 std::vector<std::string> KeyframeFiles(const std::string& run_dir);
 // One line on what the run did, from its report.json (and the ATE when known, metres).
-std::string RunSummaryText(const nlohmann::ordered_json& report, const double* ate_m);
+std::string RunSummaryText(const RunReport& report, const double* ate_m);
 
 // The trajectory from above: the plane of the ground truth's (else the estimate's) two main
 // directions of motion. `truth` may be empty.
@@ -41,16 +41,16 @@ void AddTrajectoryFigure(HtmlReport* r, const Trajectory& estimate, const Trajec
 
 // The surfel count over time of each run ("name" -> its report.json "surfels"), stable surfels.
 void AddSurfelCountFigure(HtmlReport* r,
-                          const std::vector<std::pair<std::string, nlohmann::ordered_json>>& runs);
+                          const std::vector<std::pair<std::string, SurfelReport>>& runs);
 
 // Fill overlays of up to `count` keyframes spread over the run (from keyframes/).
 void AddFillOverlays(HtmlReport* r, const std::string& run_dir, const std::string& prefix,
                      int count = 3);
 
-void AddStageTimings(HtmlReport* r, const nlohmann::ordered_json& report);
+void AddStageTimings(HtmlReport* r, const RunReport& report);
 
 // The command and the settings (report.json "config") in collapsed blocks.
-void AddSettings(HtmlReport* r, const nlohmann::ordered_json& report);
+void AddSettings(HtmlReport* r, const RunReport& report);
 
 // Links to the run folder's outputs that exist, with what each holds.
 void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& prefix);
@@ -60,6 +60,6 @@ void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& 
 // when there is one, for the ATE and the trajectory figure.
 // `file` gives the paths of the files written beside it (the 3D view's scripts).
 void WriteRunReport(const std::string& run_dir, const std::string& input,
-                    const nlohmann::ordered_json& report, const ReportFile& file);
+                    const RunReport& report, const ReportFile& file);
 
 }  // namespace gf

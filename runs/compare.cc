@@ -66,8 +66,9 @@ CompareSummary RunCompare(const ReconstructOptions& given) {
   c["input"] = options.input;
   c["frames"] = summary.run.frames;
   for (const char* v : {"with_fill", "without_fill"}) {
-    c[v]["surfels"] = std::string(v) == "with_fill" ? summary.run.report["surfels"]
-                                                    : summary.run.report_without_fill["surfels"];
+    const RunReport& run =
+        std::string(v) == "with_fill" ? summary.run.report : summary.run.report_without_fill;
+    c[v]["surfels"] = run.surfels ? json(*run.surfels) : json();
     const json truth = EvaluateMapAgainstTruth(options.input, RunLayout(options.out_dir).Path(v));
     if (truth.is_null()) continue;
     c[v]["completeness"] = truth["completeness"];

@@ -29,7 +29,7 @@ bool ReconstructOptions::Check(std::string* message) const {
 ReconstructionSummary RunPipeline(
     const ReconstructOptions& options, FrameSource* source, RunSink* sink, RunSink* without_fill,
     const std::string& label,
-    const std::function<void(const nlohmann::ordered_json& report)>& finish) {
+    const std::function<void(const RunReport& report)>& finish) {
   ReconstructionOptions pipeline = options.pipeline;
   pipeline.allow_lost = options.allow_lost;
   pipeline.input_path = options.input;
@@ -88,7 +88,8 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
   std::unique_ptr<FrameSource> source = OpenRunInput(options, &folder);
   FolderRunSink sink(options.out_dir, folder);
   // Before the final report.json: the mesh and the page (a failure of either is a warning in it).
-  auto finish = [&](const nlohmann::ordered_json& report) {
+  const RunLayout layout(options.out_dir);
+  auto finish = [&](const RunReport& report) {
     if (options.mesh && options.pipeline.fusion) {
       try {
         const MeshSummary m = WriteMapMesh(
@@ -97,7 +98,7 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
             {});
         spdlog::info("{}", m.BriefReport());
       } catch (const std::exception& e) {
-        throw std::runtime_error(options.out_dir + "/mesh.ply not written: " + e.what());
+        throw std::runtime_error(layout.Path(RunLayout::kMesh) + " not written: " + e.what());
       }
     }
     try {
@@ -105,7 +106,7 @@ ReconstructionSummary RunReconstruct(const ReconstructOptions& options) {
       WriteRunReport(options.out_dir, options.input, report,
                      [&](const std::string& name) { return sink.File(name); });
     } catch (const std::exception& e) {
-      throw std::runtime_error(options.out_dir + "/report.html not written: " + e.what());
+      throw std::runtime_error(layout.Path(RunLayout::kPage) + " not written: " + e.what());
     }
   };
   return RunPipeline(options, source.get(), &sink, nullptr, "reconstruct", finish);

@@ -53,6 +53,6 @@ std::unique_ptr<FrameSource> OpenRunInput(const ReconstructOptions& options,
 ReconstructionSummary RunPipeline(
     const ReconstructOptions& options, FrameSource* source, RunSink* sink, RunSink* without_fill,
     const std::string& label,
-    const std::function<void(const nlohmann::ordered_json& report)>& finish = {});
+    const std::function<void(const RunReport& report)>& finish = {});
 
 }  // namespace gf
