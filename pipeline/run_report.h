@@ -67,8 +67,8 @@ struct RunReport {
   int keyframes = 0;
   TrackingReport tracking;
   LoopReport loops;
-  std::optional<FillReport> fill;        // runs with the fill
-  std::optional<SurfelReport> surfels;   // runs with the fusion
+  std::optional<FillReport> fill;       // runs with the fill
+  std::optional<SurfelReport> surfels;  // runs with the fusion
   std::vector<std::string> warnings;
 };
 

@@ -41,8 +41,7 @@ long SurfelReport::StableFrom(const std::string& source) const {
   return 0;
 }
 
-FillReport FillReport::Of(const std::vector<KeyframeFill>& keyframes, int dropped,
-                          int not_filled) {
+FillReport FillReport::Of(const std::vector<KeyframeFill>& keyframes, int dropped, int not_filled) {
   FillReport r;
   r.pair_paths = {{"rectified_sgbm", 0},
                   {"plane_sweep_forward", 0},
@@ -202,8 +201,7 @@ void to_json(json& j, const LoopReport& l) {
        {"optimisations", l.optimisations},
        {"optimisation_ms", l.optimisation_ms},
        {"keyframe_ms", l.keyframe_ms},
-       {"relocalisation",
-        {{"attempts", l.relocalisation_attempts}, {"found", l.relocalised}}},
+       {"relocalisation", {{"attempts", l.relocalisation_attempts}, {"found", l.relocalised}}},
        {"database_bytes", l.database_bytes},
        {"loops", l.loops}};
 }

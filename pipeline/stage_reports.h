@@ -50,10 +50,10 @@ struct FillReport {
   long hole_pixels = 0, filled_pixels = 0, carried_pixels = 0, corrected_pixels = 0,
        corroborated_pixels = 0, seen_through_pixels = 0;
   std::optional<double> stereo_error_median_m;  // median of the paired keyframes' (metres)
-  int keyframes_filled = 0;       // keyframes the stage finished (filled, or failed)
-  int keyframes_paired = 0;       // of which found a partner
-  int keyframes_dropped = 0;      // live input: found the queue full
-  int keyframes_not_filled = 0;   // queued or offered when the run stopped
+  int keyframes_filled = 0;                     // keyframes the stage finished (filled, or failed)
+  int keyframes_paired = 0;                     // of which found a partner
+  int keyframes_dropped = 0;                    // live input: found the queue full
+  int keyframes_not_filled = 0;                 // queued or offered when the run stopped
   std::vector<FailedKeyframe> failed_keyframes;
   // How many pairs were served which way (StereoFillResult::path names, the usual ones first),
   // and why sideways pairs did not get SGBM.
@@ -91,9 +91,9 @@ struct SurfelReport {
   long budget = 0;              // FusionOptions::max_surfels
   long removed_over_budget = 0;
   int failed_frames = 0, failed_fills = 0;
-  std::optional<std::string> first_failure;  // what the first failed item threw
-  int dropped_items = 0;                     // live input: found the queue full
-  int corrections_applied = 0;               // loop corrections the map followed
+  std::optional<std::string> first_failure;          // what the first failed item threw
+  int dropped_items = 0;                             // live input: found the queue full
+  int corrections_applied = 0;                       // loop corrections the map followed
   long StableFrom(const std::string& source) const;  // by_source's count (0 when not there)
 };
 
