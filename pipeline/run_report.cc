@@ -18,6 +18,28 @@ const StepTimes* StagesReport::Find(const std::string& stage) const {
   return nullptr;
 }
 
+void to_json(json& j, const RunConfigReport& c) {
+  j = {{"tracker", c.tracker},
+       {"stereo_fill", c.stereo_fill},
+       {"surfel_fusion", c.surfel_fusion},
+       {"loop_closure", c.loop_closure},
+       {"threads", c.threads},
+       {"hardware_concurrency", c.hardware_concurrency},
+       {"file", OrNull(c.file)},
+       {"settings", c.settings}};
+}
+
+void from_json(const json& j, RunConfigReport& c) {
+  Read(j, "tracker", &c.tracker);
+  Read(j, "stereo_fill", &c.stereo_fill);
+  Read(j, "surfel_fusion", &c.surfel_fusion);
+  Read(j, "loop_closure", &c.loop_closure);
+  Read(j, "threads", &c.threads);
+  Read(j, "hardware_concurrency", &c.hardware_concurrency);
+  Read(j, "file", &c.file);
+  Read(j, "settings", &c.settings);
+}
+
 void to_json(json& j, const CpuSecondsReport& c) {
   j = Object(c.stages);
   j["other"] = c.other;
@@ -48,15 +70,7 @@ void to_json(json& j, const RunReport& r) {
                 {"kind", r.input.kind},
                 {"first_frame", r.input.first_frame},
                 {"end_frame", r.input.end_frame}};
-  const RunConfigReport& c = r.config;
-  j["config"] = {{"tracker", c.tracker},
-                 {"stereo_fill", c.stereo_fill},
-                 {"surfel_fusion", c.surfel_fusion},
-                 {"loop_closure", c.loop_closure},
-                 {"threads", c.threads},
-                 {"hardware_concurrency", c.hardware_concurrency},
-                 {"file", OrNull(c.file)},
-                 {"settings", c.settings}};
+  j["config"] = r.config;
   j["frames"] = r.frames;
   j["fps"] = r.fps;
   j["seconds"] = r.seconds;
@@ -85,17 +99,7 @@ void from_json(const json& j, RunReport& r) {
     Read(in, "first_frame", &r.input.first_frame);
     Read(in, "end_frame", &r.input.end_frame);
   }
-  if (j.contains("config")) {
-    const json& c = j["config"];
-    Read(c, "tracker", &r.config.tracker);
-    Read(c, "stereo_fill", &r.config.stereo_fill);
-    Read(c, "surfel_fusion", &r.config.surfel_fusion);
-    Read(c, "loop_closure", &r.config.loop_closure);
-    Read(c, "threads", &r.config.threads);
-    Read(c, "hardware_concurrency", &r.config.hardware_concurrency);
-    Read(c, "file", &r.config.file);
-    Read(c, "settings", &r.config.settings);
-  }
+  Read(j, "config", &r.config);
   Read(j, "frames", &r.frames);
   Read(j, "fps", &r.fps);
   Read(j, "seconds", &r.seconds);

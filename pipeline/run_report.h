@@ -72,8 +72,10 @@ struct RunReport {
   std::vector<std::string> warnings;
 };
 
+void to_json(nlohmann::ordered_json& j, const RunConfigReport& c);
 void to_json(nlohmann::ordered_json& j, const CpuSecondsReport& c);
 void to_json(nlohmann::ordered_json& j, const RunReport& r);
+void from_json(const nlohmann::ordered_json& j, RunConfigReport& c);
 void from_json(const nlohmann::ordered_json& j, CpuSecondsReport& c);
 void from_json(const nlohmann::ordered_json& j, RunReport& r);
 

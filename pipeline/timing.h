@@ -6,11 +6,7 @@
 
 #include <unistd.h>
 
-#include <algorithm>
 #include <fstream>
-#include <thread>
-#include <utility>
-#include <vector>
 
 namespace gf {
 

@@ -203,7 +203,7 @@ void AddStageTimings(HtmlReport* r, const RunReport& report) {
 void AddSettings(HtmlReport* r, const RunReport& report) {
   if (!CommandLine().empty()) r->Details("the command that made this report", CommandLine());
   r->Details("every setting (report.json \"config\"; --config reads its \"settings\")",
-             JsonText(json(report)["config"]));
+             JsonText(json(report.config)));
 }
 
 void AddFileLinks(HtmlReport* r, const std::string& run_dir, const std::string& prefix) {
