@@ -45,12 +45,27 @@ struct DenseLevel {
   const IcpOptions* options;
 };
 
+// h_upper (the upper triangle of a 6x6 matrix, row by row: 21 entries) += w j j^T and
+// g += w residual j, rounded as Eigen's rankUpdate and `g += w * residual * j` round them (entry
+// (row, col) gets (w j_col) j_row), so the poses are the same to the bit. Written out so that it
+// compiles to 27 multiply-adds per point: rankUpdate is a call into a generic product per point.
+inline void AddWeightedOuter(const double (&j)[6], double w, double residual, double* h_upper,
+                             double* g) {
+  const double wr = w * residual;
+  int k = 0;
+  for (int row = 0; row < 6; ++row) {
+    for (int col = row; col < 6; ++col) h_upper[k++] += (w * j[col]) * j[row];
+    g[row] += wr * j[row];
+  }
+}
+
 DenseAccumulator AccumulateDense(const DenseLevel& l, int row_begin, int row_end) {
   const IcpOptions& options = *l.options;
   DenseAccumulator a;
   const Eigen::Matrix3f r = l.t.RotationMatrix().cast<float>();
   const Eigen::Vector3f tr = l.t.translation().cast<float>();
   const float max_d2 = static_cast<float>(options.max_distance_m * options.max_distance_m);
+  double h_upper[21] = {}, g[6] = {};
   for (int y = row_begin; y < row_end; ++y) {
     const cv::Vec3f* vrow = l.cur_v.ptr<cv::Vec3f>(y);
     const cv::Vec3f* nrow = l.cur_n.ptr<cv::Vec3f>(y);
@@ -87,12 +102,14 @@ DenseAccumulator AccumulateDense(const DenseLevel& l, int row_begin, int row_end
         scale *= l.sigma_at_1m / (options.noise_a_m + options.noise_b_per_m * dz * dz);
       }
       const double w = HuberWeight(residual * scale, options.plane_huber) * scale * scale;
-      Eigen::Matrix<double, 6, 1> j;
-      j.head<3>() = n.cast<double>();
-      j.tail<3>() = p.cast<double>().cross(n.cast<double>());
-      a.h.selfadjointView<Eigen::Upper>().rankUpdate(j, w);
-      a.g += w * residual * j;
+      const Eigen::Vector3d c = p.cast<double>().cross(n.cast<double>());
+      const double j[6] = {n.x(), n.y(), n.z(), c.x(), c.y(), c.z()};
+      AddWeightedOuter(j, w, residual, h_upper, g);
     }
+  }
+  for (int i = 0, k = 0; i < 6; ++i) {
+    for (int col = i; col < 6; ++col) a.h(i, col) = h_upper[k++];
+    a.g(i) = g[i];
   }
   return a;
 }
