@@ -41,8 +41,10 @@ struct PoseRefinementOptions {
   double max_change_deg = 5.0;   // ... degrees
   bool photometric = true;       // then dense photometric alignment
   // Its Gauss-Newton iterations per image-pyramid level, the full-size image first (each level
-  // halves the size). OpenCV's own default; the full-size level costs about three quarters.
-  std::vector<int> photometric_iterations = {7, 7, 7, 10};
+  // halves the size). The full-size level is skipped: it costs three quarters of the step (25 of
+  // 32 ms a pair) and moves the pose by about half a millimetre (median, TUM fr1/xyz), below what
+  // the fill and the map measure (docs/experiments/2026-12-07-faster-pairs-and-icp.md).
+  std::vector<int> photometric_iterations = {0, 7, 7, 10};
   // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
   // names the field (a part's field as part.field).
   bool Check(std::string* message = nullptr) const;
