@@ -62,7 +62,7 @@ FusionStage::FusionStage(const Camera& camera, const FusionStageOptions& options
   GF_CHECK(options.Check(&problem), problem);
   for (Variant& v : variants) {
     GF_CHECK(v.sink != nullptr, "every fusion variant needs a sink");
-    maps_.push_back({std::move(v), SurfelFusion(camera, options.fusion), {}, {}, {}, 0, 0, {}, 0, 0});
+    maps_.push_back({std::move(v), SurfelFusion(camera, options.fusion), {}, {}, {}, 0, 0, {}, 0, 0, {}});
   }
   worker_.Start("gf-fusion", [this] { Run(); });
 }
@@ -129,6 +129,11 @@ void FusionStage::Finish(const std::function<bool()>& poll) {
   worker_.Join();
   if (worker_.error()) std::rethrow_exception(worker_.error());
   for (Map& m : maps_) {
+    const GlassOptions& glass = options_.fusion.glass;
+    if (glass.enabled && glass.revolution.enabled) {
+      m.revolutions = FitRevolutions(m.fusion.StableSurfels(), glass.revolution);
+      m.fusion.AddSurfels(m.revolutions.surfels);
+    }
     Record(&m);
     m.variant.sink->WriteMap(m.fusion.StableSurfels());
   }
@@ -343,6 +348,9 @@ SurfelReport FusionStage::Report(size_t index) const {
   if (!m.first_failure.empty()) r.first_failure = m.first_failure;
   r.dropped_items = dropped_.load();
   r.corrections_applied = corrections_applied_;
+  r.glass_objects = m.revolutions.objects;
+  r.glass_shapes = static_cast<int>(m.revolutions.shapes.size());
+  r.glass_shape_surfels = static_cast<long>(m.revolutions.surfels.size());
   return r;
 }
 

@@ -176,6 +176,7 @@ class FusionStage {
     int failed_frames = 0, failed_fills = 0;
     std::string first_failure;  // what the first failed item threw
     long redundant = 0, over_budget = 0;  // surfels merged as copies, removed over the budget
+    RevolutionResult revolutions;  // clear objects completed at the end (glass.revolution)
   };
   void Run();
   // Before a frame: the corrections and fills due at `at` (recorded input), or those that have

@@ -60,6 +60,7 @@ RunReport Rich() {
   r.surfels->by_source = {{"sensor", 7}, {"stereo_fill", 2}};
   r.surfels->count_over_time = {{10, 9, 7, 2, 1}};
   r.surfels->first_failure = "a test";
+  r.surfels->glass_objects = 3, r.surfels->glass_shapes = 2, r.surfels->glass_shape_surfels = 1234;
   r.warnings = {"a warning"};
   return r;
 }

@@ -69,9 +69,11 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(StereoFillOptions, plane_sweep_forward, plane
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing, agreement,
                                    correct_own_fills)
 
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RevolutionOptions, enabled, cluster_gap_m, min_surfels,
+                                   max_axis_spread, min_radius_m, max_radius_m, max_residual_m,
+                                   min_arc_deg, height_step_m, spacing_m)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(GlassOptions, enabled, min_readings_on, min_through_share,
-                                   edge_margin_px,
-                                   stable_confidence)
+                                   edge_margin_px, stable_confidence, revolution)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixel_step,
                                    fill_pixel_step, max_depth_gap_m, max_normal_angle_deg,
                                    normal_test_min_facing, max_radius_ratio, confidence_sigma,

@@ -173,7 +173,10 @@ void to_json(json& j, const SurfelReport& s) {
        {"failed_fills", s.failed_fills},
        {"first_failure", OrNull(s.first_failure)},
        {"dropped_items", s.dropped_items},
-       {"corrections_applied", s.corrections_applied}};
+       {"corrections_applied", s.corrections_applied},
+       {"glass_objects", s.glass_objects},
+       {"glass_shapes", s.glass_shapes},
+       {"glass_shape_surfels", s.glass_shape_surfels}};
 }
 
 void to_json(json& j, const AcceptedLoop& l) {
@@ -301,6 +304,9 @@ void from_json(const json& j, SurfelReport& s) {
   Read(j, "first_failure", &s.first_failure);
   Read(j, "dropped_items", &s.dropped_items);
   Read(j, "corrections_applied", &s.corrections_applied);
+  Read(j, "glass_objects", &s.glass_objects);
+  Read(j, "glass_shapes", &s.glass_shapes);
+  Read(j, "glass_shape_surfels", &s.glass_shape_surfels);
 }
 
 void from_json(const json& j, AcceptedLoop& l) {

@@ -94,6 +94,10 @@ struct SurfelReport {
   std::optional<std::string> first_failure;          // what the first failed item threw
   int dropped_items = 0;                             // live input: found the queue full
   int corrections_applied = 0;                       // loop corrections the map followed
+  // Clear objects at the end of the run (glass.revolution): groups of transparent surfels big
+  // enough for a shape, those completed as surfaces of revolution, the surfels laid on them.
+  int glass_objects = 0, glass_shapes = 0;
+  long glass_shape_surfels = 0;
   long StableFrom(const std::string& source) const;  // by_source's count (0 when not there)
 };
 

@@ -52,6 +52,7 @@
 #include "acquisition/camera.h"
 #include "acquisition/rgbd_frame.h"
 #include "acquisition/se3.h"
+#include "surfels/revolution.h"
 #include "surfels/surfel_map.h"
 
 namespace gf {
@@ -98,6 +99,9 @@ struct GlassOptions {
   // merged into it; a head-on view adds up to 1): clear glass returns a reading on a fraction of
   // its pixels, so it reaches the sensor's stable_confidence many times later than a wall.
   double stable_confidence = 3.0;
+  // At the end of a run, objects of transparent surfels that lie on a surface of revolution (a
+  // glass, a bottle, a vase) are completed all round (surfels/revolution.h).
+  RevolutionOptions revolution;
   bool Check(std::string* message = nullptr) const;
 };
 

@@ -13,7 +13,8 @@ bool GlassOptions::Check(std::string* message) const {
       .In("min_through_share", min_through_share, 0, 1, kMoreThanOne)
       .In("edge_margin_px", edge_margin_px, 1, 64, "is wider than a depth edge moves")
       .Above("stable_confidence", stable_confidence, 0, kMaxCaptureFrames,
-             kMoreFramesThanACapture);
+             kMoreFramesThanACapture)
+      .Part("revolution", revolution);
   return c.ok();
 }
 

@@ -1,0 +1,257 @@
+#include "surfels/revolution.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+
+#include "acquisition/bounds.h"
+
+namespace gf {
+namespace {
+
+constexpr double kTwoPi = 2 * M_PI;
+
+// Groups the transparent surfels of `map` into objects: surfels within `gap` of one another, by
+// a breadth-first walk over cells of that size. Groups come out in the order of their first
+// surfel in the map, each in map order (deterministic).
+std::vector<std::vector<int>> GroupTransparent(const std::vector<Surfel>& map, double gap) {
+  const uint8_t transparent = static_cast<uint8_t>(DepthSource::kTransparent);
+  auto cell_of = [gap](const Eigen::Vector3f& p) {
+    return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / gap)),
+                           static_cast<int>(std::floor(p.y() / gap)),
+                           static_cast<int>(std::floor(p.z() / gap)));
+  };
+  auto key = [](const Eigen::Vector3i& c) {
+    return (static_cast<int64_t>(c.x()) * 73856093) ^ (static_cast<int64_t>(c.y()) * 19349663) ^
+           (static_cast<int64_t>(c.z()) * 83492791);
+  };
+  std::unordered_map<int64_t, std::vector<int>> cells;
+  std::vector<int> members;
+  for (size_t i = 0; i < map.size(); ++i)
+    if (map[i].source == transparent && !map[i].removed()) {
+      cells[key(cell_of(map[i].position))].push_back(static_cast<int>(i));
+      members.push_back(static_cast<int>(i));
+    }
+  std::unordered_map<int, bool> seen;
+  std::vector<std::vector<int>> groups;
+  const float gap2 = static_cast<float>(gap * gap);
+  for (int start : members) {
+    if (seen[start]) continue;
+    std::vector<int> group{start};
+    seen[start] = true;
+    for (size_t next = 0; next < group.size(); ++next) {
+      const Eigen::Vector3f p = map[group[next]].position;
+      const Eigen::Vector3i c = cell_of(p);
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const auto it = cells.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+            if (it == cells.end()) continue;
+            for (int j : it->second)
+              if (!seen[j] && (map[j].position - p).squaredNorm() <= gap2) {
+                seen[j] = true;
+                group.push_back(j);
+              }
+          }
+    }
+    std::sort(group.begin(), group.end());
+    groups.push_back(std::move(group));
+  }
+  return groups;
+}
+
+// The direction the normals are most nearly all perpendicular to, or none (false) when they do
+// not lie near one plane.
+bool AxisOfNormals(const std::vector<Surfel>& map, const std::vector<int>& group,
+                   double max_spread, Eigen::Vector3f* axis) {
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (int i : group) {
+    const Eigen::Vector3d n = map[i].normal.cast<double>();
+    scatter += n * n.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+  const Eigen::Vector3d values = eig.eigenvalues();  // ascending
+  if (!(values(1) > 0) || values(0) > max_spread * values(1)) return false;
+  Eigen::Vector3d a = eig.eigenvectors().col(0).normalized();
+  // A sign that does not depend on the solver: the largest component positive.
+  int largest = 0;
+  a.cwiseAbs().maxCoeff(&largest);
+  if (a(largest) < 0) a = -a;
+  *axis = a.cast<float>();
+  return true;
+}
+
+// A point of the object in the axis' frame: (x, y) across the axis, h along it from `origin`.
+struct AxisPoint {
+  double x, y, h;
+};
+
+// Kasa's circle fit with one centre and one radius per height step: x^2 + y^2 = a x + b y + k_s,
+// linear in (a, b, k_s); centre (a/2, b/2), r_s^2 = k_s + |centre|^2. Steps with fewer than
+// three points get the radius of the nearest step that has them. False when a radius is not real.
+bool FitCircles(const std::vector<AxisPoint>& points, int steps, double step_m,
+                Eigen::Vector2d* centre, std::vector<double>* radius) {
+  std::vector<int> count(steps, 0), column(steps, -1);
+  for (const AxisPoint& p : points) ++count[std::min(steps - 1, static_cast<int>(p.h / step_m))];
+  int columns = 2;
+  for (int s = 0; s < steps; ++s)
+    if (count[s] >= 3) column[s] = columns++;
+  if (columns == 2) return false;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(columns, columns);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(columns);
+  for (const AxisPoint& p : points) {
+    const int c = column[std::min(steps - 1, static_cast<int>(p.h / step_m))];
+    if (c < 0) continue;
+    Eigen::VectorXd row = Eigen::VectorXd::Zero(columns);
+    row(0) = p.x, row(1) = p.y, row(c) = 1;
+    a += row * row.transpose();
+    rhs += row * (p.x * p.x + p.y * p.y);
+  }
+  const Eigen::VectorXd solution = a.ldlt().solve(rhs);
+  if (!solution.allFinite()) return false;
+  *centre = 0.5 * solution.head<2>();
+  radius->assign(steps, -1);
+  for (int s = 0; s < steps; ++s) {
+    if (column[s] < 0) continue;
+    const double r2 = solution(column[s]) + centre->squaredNorm();
+    if (!(r2 > 0)) return false;
+    (*radius)[s] = std::sqrt(r2);
+  }
+  for (int s = 0; s < steps; ++s) {  // empty steps: the nearest fitted one
+    if ((*radius)[s] >= 0) continue;
+    for (int d = 1; d < steps; ++d) {
+      if (s - d >= 0 && column[s - d] >= 0) { (*radius)[s] = (*radius)[s - d]; break; }
+      if (s + d < steps && column[s + d] >= 0) { (*radius)[s] = (*radius)[s + d]; break; }
+    }
+  }
+  return true;
+}
+
+// The median distance of the points from the fitted surface and the arc they span (degrees).
+void MeasureFit(const std::vector<AxisPoint>& points, const Eigen::Vector2d& centre,
+                const std::vector<double>& radius, double step_m, float* residual, float* arc) {
+  std::vector<double> off, angle;
+  for (const AxisPoint& p : points) {
+    const int s = std::min(static_cast<int>(radius.size()) - 1, static_cast<int>(p.h / step_m));
+    const Eigen::Vector2d d(p.x - centre.x(), p.y - centre.y());
+    off.push_back(std::abs(d.norm() - radius[s]));
+    angle.push_back(std::atan2(d.y(), d.x()));
+  }
+  std::nth_element(off.begin(), off.begin() + off.size() / 2, off.end());
+  *residual = static_cast<float>(off[off.size() / 2]);
+  std::sort(angle.begin(), angle.end());
+  double widest_gap = kTwoPi - (angle.back() - angle.front());
+  for (size_t i = 1; i < angle.size(); ++i) widest_gap = std::max(widest_gap, angle[i] - angle[i - 1]);
+  *arc = static_cast<float>((kTwoPi - widest_gap) * 180.0 / M_PI);
+}
+
+// Rings of surfels every spacing_m up the shape, each ring's surfels spacing_m apart.
+void LaySurfels(const RevolutionShape& shape, const Eigen::Vector3f& u, const Eigen::Vector3f& w,
+                const Surfel& like, double step_m, double spacing_m, std::vector<Surfel>* out) {
+  const int rings = std::max(1, static_cast<int>(std::ceil(shape.height_m / spacing_m)) + 1);
+  for (int k = 0; k < rings; ++k) {
+    const double h = std::min<double>(shape.height_m, k * spacing_m);
+    const int s = std::min(static_cast<int>(shape.radius_m.size()) - 1, static_cast<int>(h / step_m));
+    const double r = shape.radius_m[s];
+    const int around = std::max(8, static_cast<int>(std::ceil(kTwoPi * r / spacing_m)));
+    for (int j = 0; j < around; ++j) {
+      const double t = kTwoPi * j / around;
+      const Eigen::Vector3f radial =
+          static_cast<float>(std::cos(t)) * u + static_cast<float>(std::sin(t)) * w;
+      Surfel s2 = like;
+      s2.position = shape.base + static_cast<float>(h) * shape.axis + static_cast<float>(r) * radial;
+      s2.normal = radial;
+      out->push_back(s2);
+    }
+  }
+}
+
+// One object: its shape and surfels when it is a surface of revolution.
+bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
+               const RevolutionOptions& o, RevolutionShape* shape, std::vector<Surfel>* out) {
+  Eigen::Vector3f axis;
+  if (!AxisOfNormals(map, group, o.max_axis_spread, &axis)) return false;
+  const Eigen::Vector3f any = std::abs(axis.x()) < 0.9f ? Eigen::Vector3f::UnitX()
+                                                        : Eigen::Vector3f::UnitY();
+  const Eigen::Vector3f u = axis.cross(any).normalized(), w = axis.cross(u);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  double low = 1e30, high = -1e30;
+  for (int i : group) {
+    mean += map[i].position.cast<double>();
+    const double h = axis.dot(map[i].position);
+    low = std::min(low, h), high = std::max(high, h);
+  }
+  const Eigen::Vector3f origin = (mean / group.size()).cast<float>();
+  const double origin_h = axis.dot(origin);
+  std::vector<AxisPoint> points;
+  for (int i : group) {
+    const Eigen::Vector3f d = map[i].position - origin;
+    points.push_back({u.dot(d), w.dot(d), axis.dot(map[i].position) - low});
+  }
+  const int steps = std::max(1, static_cast<int>(std::ceil((high - low) / o.height_step_m)));
+  Eigen::Vector2d centre;
+  std::vector<double> radius;
+  if (!FitCircles(points, steps, o.height_step_m, &centre, &radius)) return false;
+  for (double r : radius)
+    if (r < o.min_radius_m || r > o.max_radius_m) return false;
+  MeasureFit(points, centre, radius, o.height_step_m, &shape->residual_m, &shape->arc_deg);
+  if (shape->residual_m > o.max_residual_m || shape->arc_deg < o.min_arc_deg) return false;
+  shape->axis = axis;
+  shape->base = origin + static_cast<float>(centre.x()) * u + static_cast<float>(centre.y()) * w +
+                static_cast<float>(low - origin_h) * axis;
+  shape->height_m = static_cast<float>(high - low);
+  shape->radius_m.assign(radius.begin(), radius.end());
+  shape->surfels = static_cast<int>(group.size());
+  // The laid surfels take the object's median confidence and its mean colour.
+  std::vector<float> confidence;
+  Eigen::Vector3d colour = Eigen::Vector3d::Zero();
+  for (int i : group) {
+    confidence.push_back(map[i].confidence);
+    colour += Eigen::Vector3d(map[i].red, map[i].green, map[i].blue);
+  }
+  std::nth_element(confidence.begin(), confidence.begin() + confidence.size() / 2, confidence.end());
+  colour /= group.size();
+  Surfel like;
+  like.confidence = confidence[confidence.size() / 2];
+  like.radius = static_cast<float>(0.75 * o.spacing_m);
+  like.red = static_cast<uint8_t>(colour.x() + 0.5), like.green = static_cast<uint8_t>(colour.y() + 0.5);
+  like.blue = static_cast<uint8_t>(colour.z() + 0.5);
+  like.source = static_cast<uint8_t>(DepthSource::kTransparent);
+  like.last_frame = map[group.back()].last_frame;
+  LaySurfels(*shape, u, w, like, o.height_step_m, o.spacing_m, out);
+  return true;
+}
+
+}  // namespace
+
+bool RevolutionOptions::Check(std::string* message) const {
+  FieldCheck c(message);
+  c.Above("cluster_gap_m", cluster_gap_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .In("min_surfels", min_surfels, 3, kMaxImagePixels, kMoreThanAnImagesPixels)
+      .In("max_axis_spread", max_axis_spread, 0, 1, kMoreThanOne)
+      .Above("min_radius_m", min_radius_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("max_radius_m", max_radius_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Require(min_radius_m <= max_radius_m, "min_radius_m is more than max_radius_m")
+      .Above("max_residual_m", max_residual_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .In("min_arc_deg", min_arc_deg, 0, 360, "is more than a full turn")
+      .Above("height_step_m", height_step_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("spacing_m", spacing_m, 1e-4, kMaxSceneM, kLargerThanAnyScene);
+  return c.ok();
+}
+
+RevolutionResult FitRevolutions(const std::vector<Surfel>& map, const RevolutionOptions& options) {
+  RevolutionResult result;
+  if (!options.enabled) return result;
+  for (const std::vector<int>& group : GroupTransparent(map, options.cluster_gap_m)) {
+    if (static_cast<int>(group.size()) < options.min_surfels) continue;
+    ++result.objects;
+    RevolutionShape shape;
+    if (FitObject(map, group, options, &shape, &result.surfels))
+      result.shapes.push_back(std::move(shape));
+  }
+  return result;
+}
+
+}  // namespace gf

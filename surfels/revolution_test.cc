@@ -1,0 +1,132 @@
+// FitRevolutions: clear objects completed as surfaces of revolution from the part the sensor read.
+#include "surfels/revolution.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace gf {
+namespace {
+
+constexpr uint8_t kTransparent = static_cast<uint8_t>(DepthSource::kTransparent);
+
+Surfel At(const Eigen::Vector3f& position, const Eigen::Vector3f& normal,
+          uint8_t source = kTransparent) {
+  Surfel s;
+  s.position = position;
+  s.normal = normal.normalized();
+  s.radius = 0.003f;
+  s.confidence = 4;
+  s.source = source;
+  return s;
+}
+
+// Surfels on the front `arc_deg` of a surface of revolution about `axis` through `base`, radius
+// radius(h), with 1 mm of noise on positions and about 5 degrees on normals.
+template <typename Radius>
+std::vector<Surfel> FrontOf(const Eigen::Vector3f& base, const Eigen::Vector3f& axis,
+                            double height, double arc_deg, Radius radius, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0.f, 0.001f), tilt(0.f, 0.08f);
+  const Eigen::Vector3f u = axis.unitOrthogonal(), w = axis.cross(u);
+  std::vector<Surfel> out;
+  for (double h = 0; h <= height; h += 0.006)
+    for (double a = -arc_deg / 2; a <= arc_deg / 2; a += 4) {
+      const double t = a * M_PI / 180;
+      const Eigen::Vector3f radial =
+          static_cast<float>(std::cos(t)) * u + static_cast<float>(std::sin(t)) * w;
+      const Eigen::Vector3f p = base + static_cast<float>(h) * axis +
+                                static_cast<float>(radius(h)) * radial +
+                                Eigen::Vector3f(noise(rng), noise(rng), noise(rng));
+      out.push_back(At(p, radial + Eigen::Vector3f(tilt(rng), tilt(rng), tilt(rng))));
+    }
+  return out;
+}
+
+// Distance of p from the surface of revolution (axis through base, radius(h)).
+template <typename Radius>
+double OffSurface(const Eigen::Vector3f& p, const Eigen::Vector3f& base,
+                  const Eigen::Vector3f& axis, Radius radius) {
+  const Eigen::Vector3f d = p - base;
+  const double h = axis.dot(d);
+  return std::abs((d - static_cast<float>(h) * axis).norm() - radius(h));
+}
+
+TEST(Revolution, CompletesAGlassAllRoundFromItsFront) {
+  const Eigen::Vector3f base(0.2f, -0.1f, 1.2f), axis = Eigen::Vector3f(0.1f, -1.f, 0.2f).normalized();
+  auto radius = [](double) { return 0.04; };
+  std::vector<Surfel> map = FrontOf(base, axis, 0.12, 90, radius, 1);
+  map.push_back(At({1, 1, 1}, {0, 0, 1}, static_cast<uint8_t>(DepthSource::kSensor)));
+  const RevolutionResult r = FitRevolutions(map, {});
+  ASSERT_EQ(r.shapes.size(), 1u);
+  const RevolutionShape& shape = r.shapes[0];
+  EXPECT_GT(std::abs(shape.axis.dot(axis)), std::cos(3 * M_PI / 180));
+  for (float rr : shape.radius_m) EXPECT_NEAR(rr, 0.04, 0.004);
+  EXPECT_NEAR(shape.height_m, 0.12, 0.01);
+  EXPECT_NEAR(shape.arc_deg, 90, 10);
+  // Laid all round (the back too), on the true surface, transparent.
+  ASSERT_GT(r.surfels.size(), 500u);
+  int behind = 0;
+  for (const Surfel& s : r.surfels) {
+    EXPECT_EQ(s.source, kTransparent);
+    EXPECT_LT(OffSurface(s.position, base, axis, radius), 0.005);
+    behind += (s.position - base).dot(axis.unitOrthogonal()) < 0;
+  }
+  EXPECT_GT(behind, static_cast<int>(r.surfels.size()) / 3);
+}
+
+TEST(Revolution, FollowsABottleIntoItsNeck) {
+  const Eigen::Vector3f base(0, 0.3f, 1.0f), axis(0, -1, 0);
+  auto radius = [](double h) {  // a body, a shoulder, a neck
+    return h < 0.11 ? 0.04 : h < 0.14 ? 0.04 - (h - 0.11) / 0.03 * 0.025 : 0.015;
+  };
+  const RevolutionResult r = FitRevolutions(FrontOf(base, axis, 0.2, 120, radius, 2), {});
+  ASSERT_EQ(r.shapes.size(), 1u);
+  const RevolutionShape& shape = r.shapes[0];
+  ASSERT_GE(shape.radius_m.size(), 18u);
+  std::vector<float> up = shape.radius_m;  // from the bottle's base (the axis may point down)
+  if (shape.axis.dot(axis) < 0) std::reverse(up.begin(), up.end());
+  EXPECT_NEAR(up[3], 0.04, 0.004);
+  EXPECT_NEAR(up[up.size() - 3], 0.015, 0.004);
+  int off = 0;
+  for (const Surfel& s : r.surfels) off += OffSurface(s.position, base, axis, radius) > 0.006;
+  EXPECT_LT(off, static_cast<int>(r.surfels.size()) / 10);  // on the shoulder, at most
+}
+
+TEST(Revolution, LeavesPanesSpheresAndScrapsAlone) {
+  std::vector<Surfel> map;
+  // A pane: every normal alike.
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j) map.push_back(At({0.005f * i, 0.005f * j, 1.0f}, {0, 0, -1}));
+  // A sphere's front: normals in every direction.
+  for (int i = -6; i <= 6; ++i)
+    for (int j = -6; j <= 6; ++j) {
+      const Eigen::Vector3f n(0.12f * i, 0.12f * j, -1.f);
+      map.push_back(At(Eigen::Vector3f(0.5f, 0, 1.2f) + 0.07f * n.normalized(), n));
+    }
+  // A few transparent surfels on an outline.
+  for (int i = 0; i < 10; ++i) map.push_back(At({-0.5f, 0.01f * i, 1.0f}, {1, 0, -1}));
+  const RevolutionResult r = FitRevolutions(map, {});
+  EXPECT_EQ(r.objects, 2);
+  EXPECT_TRUE(r.shapes.empty());
+  EXPECT_TRUE(r.surfels.empty());
+}
+
+TEST(Revolution, OptionsAreChecked) {
+  EXPECT_TRUE(RevolutionOptions().Check());
+  RevolutionOptions o;
+  o.min_radius_m = 0.3;
+  std::string problem;
+  EXPECT_FALSE(o.Check(&problem));
+  EXPECT_NE(problem.find("min_radius_m"), std::string::npos) << problem;
+  o = {};
+  o.spacing_m = 0;
+  EXPECT_FALSE(o.Check(&problem));
+}
+
+}  // namespace
+}  // namespace gf
