@@ -83,9 +83,10 @@ bool AxisOfNormals(const std::vector<Surfel>& map, const std::vector<int>& group
   return true;
 }
 
-// A point of the object in the axis' frame: (x, y) across the axis, h along it from `origin`.
+// A surfel of the object in the axis' frame: (x, y) across the axis, h along it from the lowest
+// surfel; (nx, ny) its normal across the axis.
 struct AxisPoint {
-  double x, y, h;
+  double x, y, h, nx, ny;
 };
 
 // Kasa's circle fit with one centre and one radius per height step: x^2 + y^2 = a x + b y + k_s,
@@ -129,22 +130,31 @@ bool FitCircles(const std::vector<AxisPoint>& points, int steps, double step_m,
   return true;
 }
 
-// The median distance of the points from the fitted surface and the arc they span (degrees).
+double Median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// The median distance of the points from the fitted surface, the median angle (degrees) between
+// their normals and the surface's (away from the axis) across the axis, and the arc they span
+// (degrees).
 void MeasureFit(const std::vector<AxisPoint>& points, const Eigen::Vector2d& centre,
-                const std::vector<double>& radius, double step_m, float* residual, float* arc) {
-  std::vector<double> off, angle;
+                const std::vector<double>& radius, double step_m, RevolutionShape* shape) {
+  std::vector<double> off, turn, angle;
   for (const AxisPoint& p : points) {
     const int s = std::min(static_cast<int>(radius.size()) - 1, static_cast<int>(p.h / step_m));
-    const Eigen::Vector2d d(p.x - centre.x(), p.y - centre.y());
+    const Eigen::Vector2d d(p.x - centre.x(), p.y - centre.y()), n(p.nx, p.ny);
     off.push_back(std::abs(d.norm() - radius[s]));
+    const double c = n.norm() > 1e-6 ? d.normalized().dot(n.normalized()) : -1.0;
+    turn.push_back(std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI);
     angle.push_back(std::atan2(d.y(), d.x()));
   }
-  std::nth_element(off.begin(), off.begin() + off.size() / 2, off.end());
-  *residual = static_cast<float>(off[off.size() / 2]);
+  shape->residual_m = static_cast<float>(Median(off));
+  shape->normal_deg = static_cast<float>(Median(turn));
   std::sort(angle.begin(), angle.end());
   double widest_gap = kTwoPi - (angle.back() - angle.front());
   for (size_t i = 1; i < angle.size(); ++i) widest_gap = std::max(widest_gap, angle[i] - angle[i - 1]);
-  *arc = static_cast<float>((kTwoPi - widest_gap) * 180.0 / M_PI);
+  shape->arc_deg = static_cast<float>((kTwoPi - widest_gap) * 180.0 / M_PI);
 }
 
 // Rings of surfels every spacing_m up the shape, each ring's surfels spacing_m apart.
@@ -168,6 +178,23 @@ void LaySurfels(const RevolutionShape& shape, const Eigen::Vector3f& u, const Ei
   }
 }
 
+// The median distance of the group's surfels from the plane that fits them best.
+double PlaneResidual(const std::vector<Surfel>& map, const std::vector<int>& group) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int i : group) mean += map[i].position.cast<double>();
+  mean /= group.size();
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (int i : group) {
+    const Eigen::Vector3d d = map[i].position.cast<double>() - mean;
+    scatter += d * d.transpose();
+  }
+  const Eigen::Vector3d normal =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvectors().col(0);
+  std::vector<double> off;
+  for (int i : group) off.push_back(std::abs(normal.dot(map[i].position.cast<double>() - mean)));
+  return Median(off);
+}
+
 // One object: its shape and surfels when it is a surface of revolution.
 bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
                const RevolutionOptions& o, RevolutionShape* shape, std::vector<Surfel>* out) {
@@ -188,7 +215,8 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
   std::vector<AxisPoint> points;
   for (int i : group) {
     const Eigen::Vector3f d = map[i].position - origin;
-    points.push_back({u.dot(d), w.dot(d), axis.dot(map[i].position) - low});
+    points.push_back({u.dot(d), w.dot(d), axis.dot(map[i].position) - low, u.dot(map[i].normal),
+                      w.dot(map[i].normal)});
   }
   const int steps = std::max(1, static_cast<int>(std::ceil((high - low) / o.height_step_m)));
   Eigen::Vector2d centre;
@@ -196,8 +224,12 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
   if (!FitCircles(points, steps, o.height_step_m, &centre, &radius)) return false;
   for (double r : radius)
     if (r < o.min_radius_m || r > o.max_radius_m) return false;
-  MeasureFit(points, centre, radius, o.height_step_m, &shape->residual_m, &shape->arc_deg);
-  if (shape->residual_m > o.max_residual_m || shape->arc_deg < o.min_arc_deg) return false;
+  MeasureFit(points, centre, radius, o.height_step_m, shape);
+  shape->plane_residual_m = static_cast<float>(PlaneResidual(map, group));
+  if (shape->residual_m > o.max_residual_m || shape->normal_deg > o.max_normal_angle_deg ||
+      shape->residual_m > o.max_residual_share * shape->plane_residual_m ||
+      shape->arc_deg < o.min_arc_deg)
+    return false;
   shape->axis = axis;
   shape->base = origin + static_cast<float>(centre.x()) * u + static_cast<float>(centre.y()) * w +
                 static_cast<float>(low - origin_h) * axis;
@@ -235,6 +267,8 @@ bool RevolutionOptions::Check(std::string* message) const {
       .Above("max_radius_m", max_radius_m, 0, kMaxSceneM, kLargerThanAnyScene)
       .Require(min_radius_m <= max_radius_m, "min_radius_m is more than max_radius_m")
       .Above("max_residual_m", max_residual_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .In("max_normal_angle_deg", max_normal_angle_deg, 0, kMaxAngleDeg, kMoreThanAHalfTurn)
+      .In("max_residual_share", max_residual_share, 0, 1, kMoreThanOne)
       .In("min_arc_deg", min_arc_deg, 0, 360, "is more than a full turn")
       .Above("height_step_m", height_step_m, 0, kMaxSceneM, kLargerThanAnyScene)
       .Above("spacing_m", spacing_m, 1e-4, kMaxSceneM, kLargerThanAnyScene);

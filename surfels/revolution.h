@@ -42,6 +42,14 @@ struct RevolutionOptions {
   // Median distance of the object's surfels from the fitted surface, metres, at most: the
   // sensor's noise on glass, a few millimetres.
   double max_residual_m = 0.005;
+  // Median angle between the surfels' normals and the fitted surface's, across the axis, at most
+  // (degrees): the surfels face away from the axis as a glass's outside does. A flat patch that
+  // a small circle happens to pass near has its normals all alike, at any angle to the circle's.
+  double max_normal_angle_deg = 30;
+  // The fitted surface's residual over that of the best plane through the same surfels, at most:
+  // the curvature must explain most of what a plane leaves (a flat patch fits a circle no better
+  // than a plane; the front of a 4 cm glass seen over 75 degrees leaves a plane 7 mm of sag).
+  double max_residual_share = 0.5;
   // The surfels must reach this far round the axis, degrees: over a sixth of a turn the arc's
   // depth (r (1 - cos 30 degrees), 5 mm for a 4 cm glass) stands above the sensor's noise.
   double min_arc_deg = 60;
@@ -60,6 +68,8 @@ struct RevolutionShape {
   std::vector<float> radius_m;  // per height_step_m from base, metres
   int surfels = 0;              // transparent surfels it was fitted to
   float residual_m = 0;         // their median distance from the surface
+  float normal_deg = 0;         // their normals' median angle from the surface's
+  float plane_residual_m = 0;   // their median distance from the plane that fits them best
   float arc_deg = 0;            // how far round the axis they reach
 };
 
