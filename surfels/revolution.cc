@@ -64,8 +64,8 @@ std::vector<std::vector<int>> GroupTransparent(const std::vector<Surfel>& map, d
 
 // The direction the normals are most nearly all perpendicular to, or none (false) when they do
 // not lie near one plane.
-bool AxisOfNormals(const std::vector<Surfel>& map, const std::vector<int>& group,
-                   double max_spread, Eigen::Vector3f* axis) {
+bool AxisOfNormals(const std::vector<Surfel>& map, const std::vector<int>& group, double max_spread,
+                   Eigen::Vector3f* axis) {
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
   for (int i : group) {
     const Eigen::Vector3d n = map[i].normal.cast<double>();
@@ -123,8 +123,14 @@ bool FitCircles(const std::vector<AxisPoint>& points, int steps, double step_m,
   for (int s = 0; s < steps; ++s) {  // empty steps: the nearest fitted one
     if ((*radius)[s] >= 0) continue;
     for (int d = 1; d < steps; ++d) {
-      if (s - d >= 0 && column[s - d] >= 0) { (*radius)[s] = (*radius)[s - d]; break; }
-      if (s + d < steps && column[s + d] >= 0) { (*radius)[s] = (*radius)[s + d]; break; }
+      if (s - d >= 0 && column[s - d] >= 0) {
+        (*radius)[s] = (*radius)[s - d];
+        break;
+      }
+      if (s + d < steps && column[s + d] >= 0) {
+        (*radius)[s] = (*radius)[s + d];
+        break;
+      }
     }
   }
   return true;
@@ -153,7 +159,8 @@ void MeasureFit(const std::vector<AxisPoint>& points, const Eigen::Vector2d& cen
   shape->normal_deg = static_cast<float>(Median(turn));
   std::sort(angle.begin(), angle.end());
   double widest_gap = kTwoPi - (angle.back() - angle.front());
-  for (size_t i = 1; i < angle.size(); ++i) widest_gap = std::max(widest_gap, angle[i] - angle[i - 1]);
+  for (size_t i = 1; i < angle.size(); ++i)
+    widest_gap = std::max(widest_gap, angle[i] - angle[i - 1]);
   shape->arc_deg = static_cast<float>((kTwoPi - widest_gap) * 180.0 / M_PI);
 }
 
@@ -163,7 +170,8 @@ void LaySurfels(const RevolutionShape& shape, const Eigen::Vector3f& u, const Ei
   const int rings = std::max(1, static_cast<int>(std::ceil(shape.height_m / spacing_m)) + 1);
   for (int k = 0; k < rings; ++k) {
     const double h = std::min<double>(shape.height_m, k * spacing_m);
-    const int s = std::min(static_cast<int>(shape.radius_m.size()) - 1, static_cast<int>(h / step_m));
+    const int s =
+        std::min(static_cast<int>(shape.radius_m.size()) - 1, static_cast<int>(h / step_m));
     const double r = shape.radius_m[s];
     const int around = std::max(8, static_cast<int>(std::ceil(kTwoPi * r / spacing_m)));
     for (int j = 0; j < around; ++j) {
@@ -171,7 +179,8 @@ void LaySurfels(const RevolutionShape& shape, const Eigen::Vector3f& u, const Ei
       const Eigen::Vector3f radial =
           static_cast<float>(std::cos(t)) * u + static_cast<float>(std::sin(t)) * w;
       Surfel s2 = like;
-      s2.position = shape.base + static_cast<float>(h) * shape.axis + static_cast<float>(r) * radial;
+      s2.position =
+          shape.base + static_cast<float>(h) * shape.axis + static_cast<float>(r) * radial;
       s2.normal = radial;
       out->push_back(s2);
     }
@@ -200,8 +209,8 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
                const RevolutionOptions& o, RevolutionShape* shape, std::vector<Surfel>* out) {
   Eigen::Vector3f axis;
   if (!AxisOfNormals(map, group, o.max_axis_spread, &axis)) return false;
-  const Eigen::Vector3f any = std::abs(axis.x()) < 0.9f ? Eigen::Vector3f::UnitX()
-                                                        : Eigen::Vector3f::UnitY();
+  const Eigen::Vector3f any =
+      std::abs(axis.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
   const Eigen::Vector3f u = axis.cross(any).normalized(), w = axis.cross(u);
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   double low = 1e30, high = -1e30;
@@ -243,12 +252,14 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
     confidence.push_back(map[i].confidence);
     colour += Eigen::Vector3d(map[i].red, map[i].green, map[i].blue);
   }
-  std::nth_element(confidence.begin(), confidence.begin() + confidence.size() / 2, confidence.end());
+  std::nth_element(confidence.begin(), confidence.begin() + confidence.size() / 2,
+                   confidence.end());
   colour /= group.size();
   Surfel like;
   like.confidence = confidence[confidence.size() / 2];
   like.radius = static_cast<float>(0.75 * o.spacing_m);
-  like.red = static_cast<uint8_t>(colour.x() + 0.5), like.green = static_cast<uint8_t>(colour.y() + 0.5);
+  like.red = static_cast<uint8_t>(colour.x() + 0.5);
+  like.green = static_cast<uint8_t>(colour.y() + 0.5);
   like.blue = static_cast<uint8_t>(colour.z() + 0.5);
   like.source = static_cast<uint8_t>(DepthSource::kTransparent);
   like.last_frame = map[group.back()].last_frame;

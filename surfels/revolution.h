@@ -65,12 +65,12 @@ struct RevolutionShape {
   Eigen::Vector3f axis = Eigen::Vector3f::UnitZ();  // unit
   Eigen::Vector3f base = Eigen::Vector3f::Zero();   // the axis at the lowest surfel's height
   float height_m = 0;                               // from base along the axis
-  std::vector<float> radius_m;  // per height_step_m from base, metres
-  int surfels = 0;              // transparent surfels it was fitted to
-  float residual_m = 0;         // their median distance from the surface
-  float normal_deg = 0;         // their normals' median angle from the surface's
-  float plane_residual_m = 0;   // their median distance from the plane that fits them best
-  float arc_deg = 0;            // how far round the axis they reach
+  std::vector<float> radius_m;                      // per height_step_m from base, metres
+  int surfels = 0;                                  // transparent surfels it was fitted to
+  float residual_m = 0;                             // their median distance from the surface
+  float normal_deg = 0;        // their normals' median angle from the surface's
+  float plane_residual_m = 0;  // their median distance from the plane that fits them best
+  float arc_deg = 0;           // how far round the axis they reach
 };
 
 struct RevolutionResult {

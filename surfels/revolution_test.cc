@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -28,8 +27,8 @@ Surfel At(const Eigen::Vector3f& position, const Eigen::Vector3f& normal,
 // Surfels on the front `arc_deg` of a surface of revolution about `axis` through `base`, radius
 // radius(h), with 1 mm of noise on positions and about 5 degrees on normals.
 template <typename Radius>
-std::vector<Surfel> FrontOf(const Eigen::Vector3f& base, const Eigen::Vector3f& axis,
-                            double height, double arc_deg, Radius radius, uint32_t seed) {
+std::vector<Surfel> FrontOf(const Eigen::Vector3f& base, const Eigen::Vector3f& axis, double height,
+                            double arc_deg, Radius radius, uint32_t seed) {
   std::mt19937 rng(seed);
   std::normal_distribution<float> noise(0.f, 0.001f), tilt(0.f, 0.08f);
   const Eigen::Vector3f u = axis.unitOrthogonal(), w = axis.cross(u);
@@ -57,7 +56,8 @@ double OffSurface(const Eigen::Vector3f& p, const Eigen::Vector3f& base,
 }
 
 TEST(Revolution, CompletesAGlassAllRoundFromItsFront) {
-  const Eigen::Vector3f base(0.2f, -0.1f, 1.2f), axis = Eigen::Vector3f(0.1f, -1.f, 0.2f).normalized();
+  const Eigen::Vector3f base(0.2f, -0.1f, 1.2f),
+      axis = Eigen::Vector3f(0.1f, -1.f, 0.2f).normalized();
   auto radius = [](double) { return 0.04; };
   std::vector<Surfel> map = FrontOf(base, axis, 0.12, 90, radius, 1);
   map.push_back(At({1, 1, 1}, {0, 0, 1}, static_cast<uint8_t>(DepthSource::kSensor)));
