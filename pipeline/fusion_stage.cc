@@ -62,7 +62,8 @@ FusionStage::FusionStage(const Camera& camera, const FusionStageOptions& options
   GF_CHECK(options.Check(&problem), problem);
   for (Variant& v : variants) {
     GF_CHECK(v.sink != nullptr, "every fusion variant needs a sink");
-    maps_.push_back({std::move(v), SurfelFusion(camera, options.fusion), {}, {}, {}, 0, 0, {}, 0, 0, {}});
+    maps_.push_back(
+        {std::move(v), SurfelFusion(camera, options.fusion), {}, {}, {}, 0, 0, {}, 0, 0, {}});
   }
   worker_.Start("gf-fusion", [this] { Run(); });
 }

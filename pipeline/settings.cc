@@ -71,8 +71,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FillCarryOptions, max_keyframes, min_agreeing
 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RevolutionOptions, enabled, cluster_gap_m, min_surfels,
                                    max_axis_spread, min_radius_m, max_radius_m, max_residual_m,
-                                   max_normal_angle_deg, max_residual_share, min_arc_deg, height_step_m,
-                                   spacing_m)
+                                   max_normal_angle_deg, max_residual_share, min_arc_deg,
+                                   height_step_m, spacing_m)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(GlassOptions, enabled, min_readings_on, min_through_share,
                                    edge_margin_px, stable_confidence, revolution)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixel_step,
