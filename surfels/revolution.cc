@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "acquisition/bounds.h"
+#include "acquisition/stats.h"
 
 namespace gf {
 namespace {
@@ -34,7 +35,7 @@ std::vector<std::vector<int>> GroupTransparent(const std::vector<Surfel>& map, d
       cells[key(cell_of(map[i].position))].push_back(static_cast<int>(i));
       members.push_back(static_cast<int>(i));
     }
-  std::unordered_map<int, bool> seen;
+  std::vector<bool> seen(map.size(), false);
   std::vector<std::vector<int>> groups;
   const float gap2 = static_cast<float>(gap * gap);
   for (int start : members) {
@@ -136,11 +137,6 @@ bool FitCircles(const std::vector<AxisPoint>& points, int steps, double step_m,
   return true;
 }
 
-double Median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
-
 // The median distance of the points from the fitted surface, the median angle (degrees) between
 // their normals and the surface's (away from the axis) across the axis, and the arc they span
 // (degrees).
@@ -187,11 +183,10 @@ void LaySurfels(const RevolutionShape& shape, const Eigen::Vector3f& u, const Ei
   }
 }
 
-// The median distance of the group's surfels from the plane that fits them best.
-double PlaneResidual(const std::vector<Surfel>& map, const std::vector<int>& group) {
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (int i : group) mean += map[i].position.cast<double>();
-  mean /= group.size();
+// The median distance of the group's surfels from the plane through `mean` (their centroid) that
+// fits them best.
+double PlaneResidual(const std::vector<Surfel>& map, const std::vector<int>& group,
+                     const Eigen::Vector3d& mean) {
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
   for (int i : group) {
     const Eigen::Vector3d d = map[i].position.cast<double>() - mean;
@@ -219,7 +214,8 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
     const double h = axis.dot(map[i].position);
     low = std::min(low, h), high = std::max(high, h);
   }
-  const Eigen::Vector3f origin = (mean / group.size()).cast<float>();
+  mean /= group.size();
+  const Eigen::Vector3f origin = mean.cast<float>();
   const double origin_h = axis.dot(origin);
   std::vector<AxisPoint> points;
   for (int i : group) {
@@ -234,7 +230,7 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
   for (double r : radius)
     if (r < o.min_radius_m || r > o.max_radius_m) return false;
   MeasureFit(points, centre, radius, o.height_step_m, shape);
-  shape->plane_residual_m = static_cast<float>(PlaneResidual(map, group));
+  shape->plane_residual_m = static_cast<float>(PlaneResidual(map, group, mean));
   if (shape->residual_m > o.max_residual_m || shape->normal_deg > o.max_normal_angle_deg ||
       shape->residual_m > o.max_residual_share * shape->plane_residual_m ||
       shape->arc_deg < o.min_arc_deg)
@@ -252,11 +248,9 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
     confidence.push_back(map[i].confidence);
     colour += Eigen::Vector3d(map[i].red, map[i].green, map[i].blue);
   }
-  std::nth_element(confidence.begin(), confidence.begin() + confidence.size() / 2,
-                   confidence.end());
   colour /= group.size();
   Surfel like;
-  like.confidence = confidence[confidence.size() / 2];
+  like.confidence = Median(std::move(confidence));
   like.radius = static_cast<float>(0.75 * o.spacing_m);
   like.red = static_cast<uint8_t>(colour.x() + 0.5);
   like.green = static_cast<uint8_t>(colour.y() + 0.5);
