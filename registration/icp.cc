@@ -52,9 +52,12 @@ struct DenseLevel {
 inline void AddWeightedOuter(const double (&j)[6], double w, double residual, double* h_upper,
                              double* g) {
   const double wr = w * residual;
+  const double wj[6] = {w * j[0], w * j[1], w * j[2], w * j[3], w * j[4], w * j[5]};
   int k = 0;
+#pragma GCC unroll 6
   for (int row = 0; row < 6; ++row) {
-    for (int col = row; col < 6; ++col) h_upper[k++] += (w * j[col]) * j[row];
+#pragma GCC unroll 6
+    for (int col = row; col < 6; ++col) h_upper[k++] += wj[col] * j[row];
     g[row] += wr * j[row];
   }
 }
@@ -246,8 +249,10 @@ IcpSummary AlignPointToPlane(const DepthPyramid& reference, const DepthPyramid& 
     const cv::Mat& cur_v = current.vertices[level];
     const cv::Mat& cur_n = current.normals[level];
     const bool finest = level == 0;
-    for (int it = 0; it <= options.iterations[li]; ++it) {
-      // The extra pass after the last step only measures (inliers, RMSE, information).
+    // The extra pass after the last step only measures (inliers, RMSE, information), which only
+    // the finest level reports.
+    const int passes = options.iterations[li] + (finest ? 1 : 0);
+    for (int it = 0; it < passes; ++it) {
       const bool measure_only = it == options.iterations[li];
       const DenseAccumulator dense = AccumulateDenseStripes(
           {cam, ref_v, ref_n, cur_v, cur_n, t, cos_max_angle, plane_scale, sigma_at_1m, &options});
@@ -276,7 +281,8 @@ IcpSummary AlignPointToPlane(const DepthPyramid& reference, const DepthPyramid& 
       if (xi.head<3>().norm() < options.convergence_step &&
           xi.tail<3>().norm() < options.convergence_step) {
         if (finest) converged_at_finest = true;
-        // Measure at the converged pose before leaving the level.
+        // Measure at the converged pose (finest level) or leave the level.
+        if (!finest) break;
         it = options.iterations[li] - 1;
       }
     }
