@@ -488,6 +488,7 @@ void RegisterCommands(CLI::App& app) {
   AddColmapImportCommand(app);
   AddDemoCommand(app);
   AddBatchCommand(app);
+  AddFillFrameCommand(app);
 }
 
 }  // namespace gf

@@ -9,5 +9,7 @@ namespace gf {
 void RegisterCommands(CLI::App& app);
 // `batch` (batch_command.cc), registered by RegisterCommands.
 void AddBatchCommand(CLI::App& app);
+// `fill-frame` (fill_frame_command.cc), registered by RegisterCommands.
+void AddFillFrameCommand(CLI::App& app);
 
 }  // namespace gf

@@ -1,0 +1,361 @@
+#include "fill/glass_frame.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "acquisition/bounds.h"
+#include "acquisition/errors.h"
+#include "acquisition/stats.h"
+
+namespace gf {
+namespace {
+
+// The ray (x/z, y/z, 1) through every pixel, CV_32FC3.
+cv::Mat PixelRays(const Camera& camera) {
+  const UndistortedPixels pixels(camera);
+  cv::Mat rays(camera.height, camera.width, CV_32FC3);
+  for (int y = 0; y < camera.height; ++y)
+    for (int x = 0; x < camera.width; ++x) {
+      const Eigen::Vector2d r = pixels.Ray(x, y);
+      rays.at<cv::Vec3f>(y, x) = cv::Vec3f(static_cast<float>(r.x()), static_cast<float>(r.y()), 1);
+    }
+  return rays;
+}
+
+Eigen::Vector3d PointAt(const cv::Mat& rays, const cv::Mat& depth_m, int x, int y) {
+  const cv::Vec3f& r = rays.at<cv::Vec3f>(y, x);
+  const double z = depth_m.at<float>(y, x);
+  return Eigen::Vector3d(r[0] * z, r[1] * z, z);
+}
+
+// The largest plane among every step-th pixel's point (RANSAC, then least squares over its
+// inliers), normal towards the camera. False when there are too few points.
+bool FitSupportPlane(const cv::Mat& rays, const cv::Mat& depth_m, const GlassFrameOptions& o,
+                     GlassFrameResult* result) {
+  std::vector<Eigen::Vector3d> points;
+  for (int y = 0; y < depth_m.rows; y += o.plane_sample_step_px)
+    for (int x = 0; x < depth_m.cols; x += o.plane_sample_step_px)
+      if (depth_m.at<float>(y, x) > 0) points.push_back(PointAt(rays, depth_m, x, y));
+  if (points.size() < 3) return false;
+  std::mt19937 random(12345);
+  std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
+  int best = 0;
+  Eigen::Vector3d best_n = Eigen::Vector3d::Zero();
+  double best_d = 0;
+  for (int it = 0; it < o.plane_iterations; ++it) {
+    const Eigen::Vector3d a = points[pick(random)], b = points[pick(random)], c = points[pick(random)];
+    Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() < 1e-9) continue;
+    n.normalize();
+    const double d = -n.dot(a);
+    int inliers = 0;
+    for (const Eigen::Vector3d& p : points) inliers += std::abs(n.dot(p) + d) < o.plane_inlier_m;
+    if (inliers > best) best = inliers, best_n = n, best_d = d;
+  }
+  if (best < 3) return false;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> inliers;
+  for (const Eigen::Vector3d& p : points)
+    if (std::abs(best_n.dot(p) + best_d) < o.plane_inlier_m) inliers.push_back(p), mean += p;
+  mean /= static_cast<double>(inliers.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& p : inliers) scatter += (p - mean) * (p - mean).transpose();
+  Eigen::Vector3d n = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvectors().col(0);
+  if (n.dot(best_n) < 0) n = -n;
+  double d = -n.dot(mean);
+  if (d < 0) n = -n, d = -d;
+  result->plane_normal = n;
+  result->plane_offset_m = d;
+  result->plane_inliers = best;
+  return true;
+}
+
+// Depth (z) at which each pixel's ray meets the plane; 0 where it does not, in front.
+cv::Mat PlaneDepth(const cv::Mat& rays, const Eigen::Vector3d& n, double d) {
+  cv::Mat t(rays.size(), CV_32F, cv::Scalar(0));
+  for (int y = 0; y < rays.rows; ++y)
+    for (int x = 0; x < rays.cols; ++x) {
+      const cv::Vec3f& r = rays.at<cv::Vec3f>(y, x);
+      const double along = n.x() * r[0] + n.y() * r[1] + n.z();
+      if (along < -1e-6) t.at<float>(y, x) = static_cast<float>(-d / along);
+    }
+  return t;
+}
+
+// Hole runs along each row that lie between two depths far apart (a shadow), or touch the image's
+// side: 255.
+cv::Mat ShadowRuns(const cv::Mat& depth_m, double relative_jump) {
+  cv::Mat shadow(depth_m.size(), CV_8U, cv::Scalar(0));
+  for (int y = 0; y < depth_m.rows; ++y) {
+    const float* row = depth_m.ptr<float>(y);
+    for (int x = 0; x < depth_m.cols;) {
+      if (row[x] > 0) {
+        ++x;
+        continue;
+      }
+      const int start = x;
+      while (x < depth_m.cols && !(row[x] > 0)) ++x;
+      const float left = start > 0 ? row[start - 1] : 0.f, right = x < depth_m.cols ? row[x] : 0.f;
+      const bool open = left <= 0 || right <= 0;
+      if (open || std::abs(left - right) > relative_jump * std::min(left, right))
+        shadow.row(y).colRange(start, x).setTo(255);
+    }
+  }
+  return shadow;
+}
+
+// The support's extent in the image: its inliers closed over objects (15 cm), the largest piece,
+// with everything it encloses.
+cv::Mat SupportExtent(const cv::Mat& on_plane, double pixels_per_m) {
+  const int k = std::max(3, static_cast<int>(0.15 * pixels_per_m) | 1);
+  cv::Mat closed;
+  cv::morphologyEx(on_plane, closed, cv::MORPH_CLOSE,
+                   cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(closed, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  cv::Mat extent(on_plane.size(), CV_8U, cv::Scalar(0));
+  if (contours.empty()) return extent;
+  size_t largest = 0;
+  for (size_t i = 1; i < contours.size(); ++i)
+    if (cv::contourArea(contours[i]) > cv::contourArea(contours[largest])) largest = i;
+  cv::drawContours(extent, contours, static_cast<int>(largest), cv::Scalar(255), cv::FILLED);
+  return extent;
+}
+
+// Step 2: the glass regions (255) from the holes over the support that are not shadows.
+cv::Mat FindGlassRegions(const cv::Mat& depth_m, const cv::Mat& plane_t, const cv::Mat& rays,
+                         const GlassFrameResult& plane, const GlassFrameOptions& o,
+                         double pixels_per_m) {
+  cv::Mat on_plane(depth_m.size(), CV_8U, cv::Scalar(0)), holes = depth_m <= 0;
+  for (int y = 0; y < depth_m.rows; ++y)
+    for (int x = 0; x < depth_m.cols; ++x)
+      if (depth_m.at<float>(y, x) > 0 &&
+          std::abs(plane.plane_normal.dot(PointAt(rays, depth_m, x, y)) + plane.plane_offset_m) <
+              o.plane_inlier_m)
+        on_plane.at<uint8_t>(y, x) = 255;
+  cv::Mat evidence = holes & SupportExtent(on_plane, pixels_per_m) & (plane_t > 0) &
+                     ~ShadowRuns(depth_m, o.shadow_relative_jump);
+  const int k = std::max(3, static_cast<int>(o.close_m * pixels_per_m) | 1);
+  cv::morphologyEx(evidence, evidence, cv::MORPH_CLOSE,
+                   cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(evidence, labels, stats, centroids, 8, CV_32S);
+  const double min_pixels = o.min_region_m2 * pixels_per_m * pixels_per_m;
+  cv::Mat mask(depth_m.size(), CV_8U, cv::Scalar(0));
+  for (int label = 1; label < n; ++label) {
+    if (stats.at<int>(label, cv::CC_STAT_AREA) < min_pixels) continue;
+    std::vector<cv::Point> points;
+    cv::findNonZero(labels == label, points);
+    std::vector<cv::Point> hull;
+    cv::convexHull(points, hull);
+    cv::fillConvexPoly(mask, hull, cv::Scalar(255));
+  }
+  return mask;
+}
+
+// A region's pixels with their rays.
+struct RegionPixel {
+  int x, y;
+  Eigen::Vector3d ray;  // (x/z, y/z, 1)
+};
+
+// The point of the axis (base + u * axis) nearest the ray s * r: the ray's parameter s, the
+// height u and the distance between them.
+void NearestToAxis(const Eigen::Vector3d& r, const Eigen::Vector3d& base,
+                   const Eigen::Vector3d& axis, double* s, double* u, double* distance) {
+  const double ra = r.dot(axis), rr = r.dot(r), rb = r.dot(base), ba = base.dot(axis);
+  const double den = rr - ra * ra;
+  *s = den > 1e-12 ? (rb - ra * ba) / den : 0.0;
+  *u = *s * ra - ba;
+  *distance = (*s * r - base - *u * axis).norm();
+}
+
+// Nearest-the-camera solution s of |(s r - base) - ((s r - base) . axis) axis| = radius.
+bool FrontOfCylinder(const Eigen::Vector3d& r, const Eigen::Vector3d& base,
+                     const Eigen::Vector3d& axis, double radius, double* s) {
+  const Eigen::Vector3d w = r - r.dot(axis) * axis, v = -(base - base.dot(axis) * axis);
+  const double a = w.dot(w), b = 2 * w.dot(v), c = v.dot(v) - radius * radius;
+  const double disc = b * b - 4 * a * c;
+  if (a <= 0 || disc < 0) return false;
+  *s = (-b - std::sqrt(disc)) / (2 * a);
+  return *s > 0;
+}
+
+// Step 3: the radius per height step (keyed by step, from -3 below the base) of a standing object
+// whose base front is `front`, axis along `axis`, from its silhouette: the first and last pixel
+// of each row, whose rays graze the surface where they pass the axis nearest, at the radius.
+// Its base radius (the median of the three lowest steps') in *radius.
+std::map<int, double> Profile(const std::vector<RegionPixel>& region, const Eigen::Vector3d& front,
+                              const Eigen::Vector3d& away, const Eigen::Vector3d& axis,
+                              const GlassFrameOptions& o, double* radius) {
+  std::map<int, std::pair<int, int>> row_ends;  // row -> (index of first, of last) pixel
+  for (int i = 0; i < static_cast<int>(region.size()); ++i) {
+    auto [it, added] = row_ends.try_emplace(region[i].y, i, i);
+    if (region[i].x < region[it->second.first].x) it->second.first = i;
+    if (region[i].x > region[it->second.second].x) it->second.second = i;
+  }
+  std::map<int, double> profile;
+  *radius = 0.02;
+  for (int it = 0; it < 4; ++it) {
+    const Eigen::Vector3d base = front + *radius * away;
+    std::map<int, std::vector<double>> by_step;
+    for (const auto& [row, ends] : row_ends)
+      for (int i : {ends.first, ends.second}) {
+        double s, u, distance;
+        NearestToAxis(region[i].ray, base, axis, &s, &u, &distance);
+        const int step = static_cast<int>(std::floor(u / o.height_step_m));
+        if (step >= -3) by_step[step].push_back(distance);
+      }
+    profile.clear();
+    for (auto& [step, distances] : by_step)
+      if (distances.size() >= 2) profile[step] = Median(distances);
+    std::vector<double> lowest;
+    for (const auto& [step, r] : profile)
+      if (step >= 0 && lowest.size() < 3) lowest.push_back(r);
+    if (lowest.empty()) return {};
+    *radius = Median(lowest);
+  }
+  return profile;
+}
+
+}  // namespace
+
+namespace {
+
+// Steps 3 and 4 for one region: fits the standing surface of revolution and puts its depth in
+// depth_filled where the sensor read nothing or read through it.
+void ShapeRegion(const std::vector<RegionPixel>& region, const cv::Mat& plane_t,
+                 const cv::Mat& depth_m, const Eigen::Vector3d& axis, const GlassFrameOptions& o,
+                 cv::Mat* depth_filled, GlassFrameRegion* out) {
+  // The base's front: where the region's nearest ray (in its lowest percent) meets the plane.
+  std::vector<std::pair<double, Eigen::Vector3d>> hits;
+  for (const RegionPixel& p : region) {
+    const float t = plane_t.at<float>(p.y, p.x);
+    if (t > 0) hits.emplace_back(t * p.ray.norm(), t * p.ray);
+  }
+  if (hits.empty()) return;
+  const size_t k = hits.size() / 100;
+  std::nth_element(hits.begin(), hits.begin() + k, hits.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  const Eigen::Vector3d front = hits[k].second;
+  Eigen::Vector3d away = front.normalized() - front.normalized().dot(axis) * axis;
+  if (away.norm() < 1e-6) return;  // looking straight down the axis
+  away.normalize();
+  double radius = 0;
+  const std::map<int, double> profile = Profile(region, front, away, axis, o, &radius);
+  if (profile.empty() || radius < o.min_radius_m || radius > o.max_radius_m) return;
+  out->radius_m = static_cast<float>(radius);
+  if ((profile.rbegin()->first + 1) * o.height_step_m < o.min_height_m) return;
+  out->shaped = true;
+  const Eigen::Vector3d base = front + radius * away;
+  for (const RegionPixel& p : region) {
+    // The radius at the height where the ray passes the axis nearest (where a silhouette ray
+    // grazes the surface: the heights the profile was measured at).
+    double s, u, distance, z = 0;
+    NearestToAxis(p.ray, base, axis, &s, &u, &distance);
+    const auto step = profile.find(static_cast<int>(std::floor(u / o.height_step_m)));
+    if (step == profile.end() || !FrontOfCylinder(p.ray, base, axis, step->second, &z)) continue;
+    out->height_m = std::max(out->height_m, static_cast<float>((z * p.ray - base).dot(axis)));
+    // A reading is replaced only where it reads the support through the glass: on the plane (or
+    // beyond it) and behind the surface. A reading above the support may be the glass itself (a
+    // lid, a rim) or something behind it; one frame does not tell which, so it stays.
+    const float sensor = depth_m.at<float>(p.y, p.x);
+    const float support = plane_t.at<float>(p.y, p.x);
+    if (sensor > 0 && (sensor <= z + o.behind_margin_m || support <= 0 ||
+                       sensor < support - o.plane_inlier_m))
+      continue;
+    depth_filled->at<float>(p.y, p.x) = static_cast<float>(z);
+    ++out->replaced;
+  }
+}
+
+}  // namespace
+
+bool GlassFrameOptions::Check(std::string* message) const {
+  FieldCheck c(message);
+  c.Above("plane_inlier_m", plane_inlier_m, 0, kMaxDepthM, kFartherThanAnySensor)
+      .In("plane_iterations", plane_iterations, 1, kMaxIterations * 100, "is more draws than useful")
+      .In("plane_sample_step_px", plane_sample_step_px, 1, kMaxImageSidePx, kLargerThanAnyImage)
+      .Above("shadow_relative_jump", shadow_relative_jump, 0, kMaxRelativeDepth,
+             "is more than any depth ratio")
+      .In("close_m", close_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("min_region_m2", min_region_m2, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("height_step_m", height_step_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("min_radius_m", min_radius_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("max_radius_m", max_radius_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Require(min_radius_m <= max_radius_m, "min_radius_m is more than max_radius_m")
+      .In("min_height_m", min_height_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .In("behind_margin_m", behind_margin_m, 0, kMaxDepthM, kFartherThanAnySensor);
+  return c.ok();
+}
+
+std::string GlassFrameResult::BriefReport() const {
+  int shaped = 0;
+  for (const GlassFrameRegion& r : regions) shaped += r.shaped;
+  char buffer[200];
+  std::snprintf(buffer, sizeof(buffer),
+                "%s; %d glass regions (%d shaped), %d glass pixels, %d pixels given the glass's "
+                "depth",
+                plane_found ? "support plane found" : "no support plane",
+                static_cast<int>(regions.size()), shaped,
+                glass_mask.empty() ? 0 : cv::countNonZero(glass_mask), replaced_pixels);
+  return buffer;
+}
+
+GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
+                                  const Camera& camera, const GlassFrameOptions& options,
+                                  const cv::Mat& given_mask) {
+  std::string problem;
+  GF_CHECK(options.Check(&problem), problem);
+  GF_CHECK(depth_m.type() == CV_32FC1 && depth_m.cols == camera.width &&
+               depth_m.rows == camera.height,
+           "depth must be CV_32F metres at the camera's size");
+  GF_CHECK(given_mask.empty() || (given_mask.type() == CV_8UC1 && given_mask.size() == depth_m.size()),
+           "the given mask must be CV_8U at the depth's size");
+  GF_CHECK(color.empty() || color.size() == depth_m.size(), "colour and depth differ in size");
+  GlassFrameResult result;
+  result.depth_filled = depth_m.clone();
+  result.glass_mask = cv::Mat::zeros(depth_m.size(), CV_8U);
+  const cv::Mat rays = PixelRays(camera);
+  result.plane_found = FitSupportPlane(rays, depth_m, options, &result);
+  if (!result.plane_found && given_mask.empty()) return result;
+  cv::Mat plane_t = result.plane_found
+                        ? PlaneDepth(rays, result.plane_normal, result.plane_offset_m)
+                        : cv::Mat::zeros(depth_m.size(), CV_32F);
+  // Pixels per metre at the support's typical depth (its median over the image).
+  std::vector<float> depths;
+  for (int y = 0; y < plane_t.rows; y += 8)
+    for (int x = 0; x < plane_t.cols; x += 8)
+      if (plane_t.at<float>(y, x) > 0) depths.push_back(plane_t.at<float>(y, x));
+  const double pixels_per_m = 0.5 * (camera.fx + camera.fy) / Median(depths, 1.f);
+  result.glass_mask =
+      !given_mask.empty()
+          ? cv::Mat(given_mask != 0)
+          : FindGlassRegions(depth_m, plane_t, rays, result, options, pixels_per_m);
+  cv::Mat labels;
+  const int n = cv::connectedComponents(result.glass_mask, labels, 8, CV_32S);
+  std::vector<std::vector<RegionPixel>> regions(std::max(0, n - 1));
+  for (int y = 0; y < labels.rows; ++y)
+    for (int x = 0; x < labels.cols; ++x)
+      if (const int label = labels.at<int>(y, x); label > 0) {
+        const cv::Vec3f& r = rays.at<cv::Vec3f>(y, x);
+        regions[label - 1].push_back({x, y, Eigen::Vector3d(r[0], r[1], r[2])});
+      }
+  for (const std::vector<RegionPixel>& region : regions) {
+    GlassFrameRegion out;
+    out.pixels = static_cast<int>(region.size());
+    if (result.plane_found)
+      ShapeRegion(region, plane_t, depth_m, result.plane_normal, options, &result.depth_filled,
+                  &out);
+    result.replaced_pixels += out.replaced;
+    result.regions.push_back(out);
+  }
+  return result;
+}
+
+}  // namespace gf

@@ -1,0 +1,135 @@
+#include "runs/fill_frame.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "acquisition/depth.h"
+#include "acquisition/errors.h"
+#include "acquisition/file_util.h"
+#include "acquisition/image_io.h"
+#include "acquisition/json_text.h"
+
+namespace gf {
+namespace {
+
+bool EndsWith(std::string s, const std::string& tail) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+// The single-channel float image in `m` (its first channel), holes where not finite or <= 0.
+cv::Mat CleanMetres(const std::string& path, const cv::Mat& m) {
+  if (m.empty() || (m.depth() != CV_32F && m.depth() != CV_64F))
+    throw InputError(path, "holds no float depth image (metres)");
+  cv::Mat first;
+  cv::extractChannel(m, first, 0);
+  first.convertTo(first, CV_32F);
+  for (int y = 0; y < first.rows; ++y) {
+    float* row = first.ptr<float>(y);
+    for (int x = 0; x < first.cols; ++x)
+      if (!std::isfinite(row[x]) || row[x] <= 0) row[x] = 0;
+  }
+  return first;
+}
+
+cv::Mat ReadFileStorageDepth(const std::string& path) {
+  cv::Mat m;
+  try {
+    cv::FileStorage fs(path, cv::FileStorage::READ);
+    if (!fs.isOpened()) throw InputError(path, "cannot be opened as OpenCV FileStorage");
+    cv::FileNode node = fs["depth_image"];
+    if (node.empty()) node = *fs.root().begin();
+    node >> m;
+  } catch (const cv::Exception& e) {
+    throw InputError(path, "cannot be read as OpenCV FileStorage: " + e.msg);
+  }
+  return CleanMetres(path, m);
+}
+
+nlohmann::ordered_json Report(const FillFrameOptions& o, const FillFrameSummary& s) {
+  const GlassFrameResult& r = s.result;
+  nlohmann::ordered_json regions = nlohmann::ordered_json::array();
+  for (const GlassFrameRegion& g : r.regions)
+    regions.push_back({{"pixels", g.pixels},
+                       {"shaped", g.shaped},
+                       {"radius_m", g.radius_m},
+                       {"height_m", g.height_m},
+                       {"replaced_pixels", g.replaced}});
+  return {{"color", o.color_file},
+          {"depth", o.depth_file},
+          {"camera", o.camera_file},
+          {"mask", o.mask_file.empty() ? "found" : o.mask_file},
+          {"depth_pixels", s.depth_pixels},
+          {"support_plane",
+           {{"found", r.plane_found},
+            {"normal", {r.plane_normal.x(), r.plane_normal.y(), r.plane_normal.z()}},
+            {"offset_m", r.plane_offset_m},
+            {"ransac_inliers", r.plane_inliers}}},
+          {"glass_pixels", cv::countNonZero(r.glass_mask)},
+          {"replaced_pixels", r.replaced_pixels},
+          {"regions", regions}};
+}
+
+}  // namespace
+
+std::string FillFrameSummary::BriefReport() const { return result.BriefReport(); }
+
+cv::Mat ReadMetricDepth(const std::string& path, double depth_scale) {
+  if (!std::filesystem::is_regular_file(path)) throw InputError(path, "no such file");
+  if (EndsWith(path, ".exr")) {
+    // OpenCV decodes OpenEXR only when this is set before its first EXR read.
+    setenv("OPENCV_IO_ENABLE_OPENEXR", "1", 0);
+    cv::Mat m;
+    try {
+      m = cv::imread(path, cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+      throw InputError(path, "cannot be decoded as OpenEXR: " + e.msg);
+    }
+    return CleanMetres(path, m);
+  }
+  for (const char* ext : {".xml", ".yml", ".yaml", ".json", ".xml.gz", ".yml.gz", ".yaml.gz",
+                          ".json.gz"})
+    if (EndsWith(path, ext)) return ReadFileStorageDepth(path);
+  const cv::Mat raw = ReadDepthImage(path);
+  cv::Mat depth_m;
+  ConvertDepth(raw, DepthConvention::FromDepthScale(depth_scale), DepthConversionOptions(),
+               &depth_m, nullptr);
+  return depth_m;
+}
+
+FillFrameSummary RunFillFrame(const FillFrameOptions& o) {
+  std::string problem;
+  if (!o.glass.Check(&problem)) throw InputError("glass settings", problem);
+  const CameraFile camera = LoadCameraFile(o.camera_file);
+  const cv::Mat depth = ReadMetricDepth(o.depth_file, camera.depth_scale);
+  const cv::Size size(camera.camera.width, camera.camera.height);
+  if (depth.size() != size)
+    throw InputError(o.depth_file, "is " + std::to_string(depth.cols) + "x" +
+                                       std::to_string(depth.rows) + ", the camera " +
+                                       std::to_string(size.width) + "x" +
+                                       std::to_string(size.height));
+  const cv::Mat color = ReadColorImage(o.color_file);
+  if (color.size() != size) throw InputError(o.color_file, "is not at the camera's size");
+  cv::Mat mask;
+  if (!o.mask_file.empty()) {
+    mask = cv::imread(o.mask_file, cv::IMREAD_GRAYSCALE);
+    if (mask.empty()) throw InputError(o.mask_file, "cannot be decoded as an image");
+    if (mask.size() != size) throw InputError(o.mask_file, "is not at the camera's size");
+  }
+  FillFrameSummary s;
+  s.depth_pixels = cv::countNonZero(depth > 0);
+  s.result = FindGlassInFrame(color, depth, camera.camera, o.glass, mask);
+  std::filesystem::create_directories(o.out_dir);
+  const std::filesystem::path out(o.out_dir);
+  WriteImage((out / "glass_mask.png").string(), s.result.glass_mask);
+  WriteImage((out / "depth_filled.png").string(),
+             DepthToRaw(s.result.depth_filled, DepthConvention::Millimetres()));
+  WriteTextFileAtomically((out / "fill_frame.json").string(), JsonText(Report(o, s)) + "\n");
+  return s;
+}
+
+}  // namespace gf
