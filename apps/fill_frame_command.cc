@@ -18,6 +18,7 @@ void AddFillFrameCommand(CLI::App& app) {
       "Example: glassfusion fill-frame --color rgb.jpg --depth depth.exr --camera camera.json "
       "--out out\n"
       "Writes: OUT/depth_filled.png (16-bit millimetres), OUT/glass_mask.png (255 = glass), "
+      "OUT/glass_overlay.png (the colour: glass cyan, pixels given its depth orange), "
       "OUT/fill_frame.json (the support plane, each glass region, pixels changed).");
   cmd->add_option("--color", options->color_file, "colour image")->required();
   cmd->add_option("--depth", options->depth_file, "depth image, registered to the colour")

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "acquisition/depth.h"
@@ -74,6 +75,19 @@ nlohmann::ordered_json Report(const FillFrameOptions& o, const FillFrameSummary&
           {"regions", regions}};
 }
 
+// The colour image with the glass found tinted cyan and the pixels given its depth orange (as a
+// run's fill_overlay.png shows glass and completed pixels).
+cv::Mat Overlay(const cv::Mat& color, const cv::Mat& depth_m, const GlassFrameResult& r) {
+  cv::Mat overlay = color.clone(), tinted;
+  cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(255, 200, 0)), 0.5, 0,
+                  tinted);
+  tinted.copyTo(overlay, r.glass_mask);
+  cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(0, 165, 255)), 0.5, 0,
+                  tinted);
+  tinted.copyTo(overlay, r.depth_filled != depth_m);
+  return overlay;
+}
+
 }  // namespace
 
 std::string FillFrameSummary::BriefReport() const { return result.BriefReport(); }
@@ -128,6 +142,7 @@ FillFrameSummary RunFillFrame(const FillFrameOptions& o) {
   WriteImage((out / "glass_mask.png").string(), s.result.glass_mask);
   WriteImage((out / "depth_filled.png").string(),
              DepthToRaw(s.result.depth_filled, DepthConvention::Millimetres()));
+  WriteImage((out / "glass_overlay.png").string(), Overlay(color, depth, s.result));
   WriteTextFileAtomically((out / "fill_frame.json").string(), JsonText(Report(o, s)) + "\n");
   return s;
 }

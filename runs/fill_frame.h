@@ -1,5 +1,5 @@
 // `glassfusion fill-frame`: clear glass in one RGB-D frame (fill/glass_frame.h) from files, into
-// OUT/depth_filled.png, OUT/glass_mask.png and OUT/fill_frame.json.
+// OUT/depth_filled.png, OUT/glass_mask.png, OUT/glass_overlay.png and OUT/fill_frame.json.
 //
 // Depth files: a 16-bit PNG (or PGM) in the camera's depth_scale units, an OpenEXR image of float
 // metres (its first channel), or an OpenCV FileStorage file (.xml, .yml, .json, optionally .gz)
@@ -22,7 +22,7 @@ struct FillFrameOptions {
   std::string color_file;   // colour image (any format OpenCV reads)
   std::string depth_file;   // depth, as above
   std::string camera_file;  // camera.json (acquisition/camera.h)
-  std::string out_dir;      // created if missing; only the three files named above are written
+  std::string out_dir;      // created if missing; only the four files named above are written
   std::string mask_file;    // optional: the glass's pixels (non-zero), to skip finding them
   GlassFrameOptions glass;
 };
