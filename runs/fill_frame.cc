@@ -43,10 +43,11 @@ cv::Mat ReadFileStorageDepth(const std::string& path) {
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) throw InputError(path, "cannot be opened as OpenCV FileStorage");
     cv::FileNode node = fs["depth_image"];
-    if (node.empty()) node = *fs.root().begin();
+    if (node.empty() && fs.root().isMap() && fs.root().size() > 0) node = *fs.root().begin();
+    if (!node.isMap()) throw InputError(path, "holds no float depth image (metres)");
     node >> m;
-  } catch (const cv::Exception& e) {
-    throw InputError(path, "cannot be read as OpenCV FileStorage: " + e.msg);
+  } catch (const cv::Exception&) {
+    throw InputError(path, "cannot be read as OpenCV FileStorage (.xml, .yml, .json)");
   }
   return CleanMetres(path, m);
 }
@@ -100,8 +101,8 @@ cv::Mat ReadMetricDepth(const std::string& path, double depth_scale) {
     cv::Mat m;
     try {
       m = cv::imread(path, cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception& e) {
-      throw InputError(path, "cannot be decoded as OpenEXR: " + e.msg);
+    } catch (const cv::Exception&) {
+      throw InputError(path, "cannot be decoded as OpenEXR");
     }
     return CleanMetres(path, m);
   }

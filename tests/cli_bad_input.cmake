@@ -222,5 +222,15 @@ string(JSON path ERROR_VARIABLE json_error GET "${report}" input path)
 if(json_error OR NOT path MATCHES "/caf.+$")
   message(FATAL_ERROR "report.json of a Latin-1 folder name: ${json_error}")
 endif()
+# fill-frame: a depth file that is not there, and a FileStorage file without a depth image.
+expect_error("^error: .*no_depth.exr: no such file$" fill-frame --color "${tmp}/rgb/1.png"
+             --depth "${tmp}/no_depth.exr" --camera "${tmp}/camera.json" --out "${tmp}/ff")
+file(WRITE "${tmp}/depth.yml" "%YAML:1.0\nname: 3\n")
+expect_error("^error: .*depth.yml: holds no float depth image \\(metres\\)$" fill-frame
+             --color "${tmp}/rgb/1.png" --depth "${tmp}/depth.yml" --camera "${tmp}/camera.json"
+             --out "${tmp}/ff")
+if(EXISTS "${tmp}/ff")
+  message(FATAL_ERROR "a refused fill-frame left ${tmp}/ff behind")
+endif()
 file(REMOVE_RECURSE "${tmp}")
 message("bad input handled")
