@@ -33,14 +33,14 @@ Eigen::Vector3d PointAt(const cv::Mat& rays, const cv::Mat& depth_m, int x, int 
   return Eigen::Vector3d(r[0] * z, r[1] * z, z);
 }
 
-// The largest plane among every step-th pixel's point (RANSAC, then least squares over its
-// inliers), normal towards the camera. False when there are too few points.
-bool FitSupportPlane(const cv::Mat& rays, const cv::Mat& depth_m, const GlassFrameOptions& o,
-                     GlassFrameResult* result) {
-  std::vector<Eigen::Vector3d> points;
-  for (int y = 0; y < depth_m.rows; y += o.plane_sample_step_px)
-    for (int x = 0; x < depth_m.cols; x += o.plane_sample_step_px)
-      if (depth_m.at<float>(y, x) > 0) points.push_back(PointAt(rays, depth_m, x, y));
+// A plane through points: the one with the most within plane_inlier_m (RANSAC, a fixed seed),
+// refined by least squares over those; normal towards the camera. False when none has 3.
+struct Plane {
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  double offset = 0;  // normal . p + offset = 0, > 0
+  int inliers = 0;
+};
+bool FitPlane(const std::vector<Eigen::Vector3d>& points, const GlassFrameOptions& o, Plane* plane) {
   if (points.size() < 3) return false;
   std::mt19937 random(12345);
   std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
@@ -69,22 +69,19 @@ bool FitSupportPlane(const cv::Mat& rays, const cv::Mat& depth_m, const GlassFra
   if (n.dot(best_n) < 0) n = -n;
   double d = -n.dot(mean);
   if (d < 0) n = -n, d = -d;
-  result->plane_normal = n;
-  result->plane_offset_m = d;
-  result->plane_inliers = best;
+  *plane = {n, d, best};
   return true;
 }
 
-// Depth (z) at which each pixel's ray meets the plane; 0 where it does not, in front.
-cv::Mat PlaneDepth(const cv::Mat& rays, const Eigen::Vector3d& n, double d) {
-  cv::Mat t(rays.size(), CV_32F, cv::Scalar(0));
-  for (int y = 0; y < rays.rows; ++y)
-    for (int x = 0; x < rays.cols; ++x) {
-      const cv::Vec3f& r = rays.at<cv::Vec3f>(y, x);
-      const double along = n.x() * r[0] + n.y() * r[1] + n.z();
-      if (along < -1e-6) t.at<float>(y, x) = static_cast<float>(-d / along);
-    }
-  return t;
+// The points of every step-th pixel with a reading inside `area` (and not in `except`, if given).
+std::vector<Eigen::Vector3d> PointsIn(const cv::Mat& rays, const cv::Mat& depth_m,
+                                      const cv::Rect& area, int step, const cv::Mat& except) {
+  std::vector<Eigen::Vector3d> points;
+  for (int y = area.y; y < area.y + area.height; y += step)
+    for (int x = area.x; x < area.x + area.width; x += step)
+      if (depth_m.at<float>(y, x) > 0 && (except.empty() || !except.at<uint8_t>(y, x)))
+        points.push_back(PointAt(rays, depth_m, x, y));
+  return points;
 }
 
 // Hole runs along each row that lie between two depths far apart (a shadow), or touch the image's
@@ -127,19 +124,43 @@ cv::Mat SupportExtent(const cv::Mat& on_plane, double pixels_per_m) {
   return extent;
 }
 
-// Step 2: the glass regions (255) from the holes over the support that are not shadows.
-cv::Mat FindGlassRegions(const cv::Mat& depth_m, const cv::Mat& plane_t, const cv::Mat& rays,
-                         const GlassFrameResult& plane, const GlassFrameOptions& o,
+// Up to `count` planes, largest first, each fitted to the points the ones before left, while a
+// plane holds at least a twentieth of all the points.
+std::vector<Plane> SupportPlanes(std::vector<Eigen::Vector3d> points, int count,
+                                 const GlassFrameOptions& o) {
+  std::vector<Plane> planes;
+  const size_t all = points.size();
+  Plane plane;
+  while (static_cast<int>(planes.size()) < count && FitPlane(points, o, &plane) &&
+         plane.inliers * 20 >= static_cast<int>(all)) {
+    planes.push_back(plane);
+    points.erase(std::remove_if(points.begin(), points.end(),
+                                [&plane, &o](const Eigen::Vector3d& p) {
+                                  return std::abs(plane.normal.dot(p) + plane.offset) <
+                                         o.plane_inlier_m;
+                                }),
+                 points.end());
+  }
+  return planes;
+}
+
+// Step 2: the glass regions (255) from the holes over the supports that are not shadows.
+cv::Mat FindGlassRegions(const cv::Mat& depth_m, const cv::Mat& rays,
+                         const std::vector<Plane>& planes, const GlassFrameOptions& o,
                          double pixels_per_m) {
-  cv::Mat on_plane(depth_m.size(), CV_8U, cv::Scalar(0)), holes = depth_m <= 0;
-  for (int y = 0; y < depth_m.rows; ++y)
-    for (int x = 0; x < depth_m.cols; ++x)
-      if (depth_m.at<float>(y, x) > 0 &&
-          std::abs(plane.plane_normal.dot(PointAt(rays, depth_m, x, y)) + plane.plane_offset_m) <
-              o.plane_inlier_m)
-        on_plane.at<uint8_t>(y, x) = 255;
-  cv::Mat evidence = holes & SupportExtent(on_plane, pixels_per_m) & (plane_t > 0) &
-                     ~ShadowRuns(depth_m, o.shadow_relative_jump);
+  cv::Mat extent(depth_m.size(), CV_8U, cv::Scalar(0));
+  for (const Plane& plane : planes) {
+    cv::Mat on_plane(depth_m.size(), CV_8U, cv::Scalar(0));
+    for (int y = 0; y < depth_m.rows; ++y)
+      for (int x = 0; x < depth_m.cols; ++x)
+        if (depth_m.at<float>(y, x) > 0 &&
+            std::abs(plane.normal.dot(PointAt(rays, depth_m, x, y)) + plane.offset) <
+                o.plane_inlier_m)
+          on_plane.at<uint8_t>(y, x) = 255;
+    extent |= SupportExtent(on_plane, pixels_per_m);
+  }
+  cv::Mat evidence =
+      (depth_m <= 0) & extent & ~ShadowRuns(depth_m, o.shadow_relative_jump);
   const int k = std::max(3, static_cast<int>(o.close_m * pixels_per_m) | 1);
   cv::morphologyEx(evidence, evidence, cv::MORPH_CLOSE,
                    cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
@@ -229,13 +250,19 @@ namespace {
 
 // Steps 3 and 4 for one region: fits the standing surface of revolution and puts its depth in
 // depth_filled where the sensor read nothing or read through it.
-void ShapeRegion(const std::vector<RegionPixel>& region, const cv::Mat& plane_t,
-                 const cv::Mat& depth_m, const Eigen::Vector3d& axis, const GlassFrameOptions& o,
-                 cv::Mat* depth_filled, GlassFrameRegion* out) {
+void ShapeRegion(const std::vector<RegionPixel>& region, const Plane& support,
+                 const cv::Mat& depth_m, const GlassFrameOptions& o, cv::Mat* depth_filled,
+                 GlassFrameRegion* out) {
+  const Eigen::Vector3d& axis = support.normal;
+  // Depth (z) at which a ray (x/z, y/z, 1) meets the support; 0 where it does not, in front.
+  auto support_depth = [&support](const Eigen::Vector3d& ray) {
+    const double along = support.normal.dot(ray);
+    return along < -1e-6 ? -support.offset / along : 0.0;
+  };
   // The base's front: where the region's nearest ray (in its lowest percent) meets the plane.
   std::vector<std::pair<double, Eigen::Vector3d>> hits;
   for (const RegionPixel& p : region) {
-    const float t = plane_t.at<float>(p.y, p.x);
+    const double t = support_depth(p.ray);
     if (t > 0) hits.emplace_back(t * p.ray.norm(), t * p.ray);
   }
   if (hits.empty()) return;
@@ -265,13 +292,34 @@ void ShapeRegion(const std::vector<RegionPixel>& region, const cv::Mat& plane_t,
     // beyond it) and behind the surface. A reading above the support may be the glass itself (a
     // lid, a rim) or something behind it; one frame does not tell which, so it stays.
     const float sensor = depth_m.at<float>(p.y, p.x);
-    const float support = plane_t.at<float>(p.y, p.x);
-    if (sensor > 0 && (sensor <= z + o.behind_margin_m || support <= 0 ||
-                       sensor < support - o.plane_inlier_m))
+    const double support_z = support_depth(p.ray);
+    if (sensor > 0 && (sensor <= z + o.behind_margin_m || support_z <= 0 ||
+                       sensor < support_z - o.plane_inlier_m))
       continue;
     depth_filled->at<float>(p.y, p.x) = static_cast<float>(z);
     ++out->replaced;
   }
+}
+
+// The surface a region stands on: the plane read around it (a window half its size wider on
+// each side and half its height lower), or the frame's support plane when too little is read
+// there.
+Plane RegionSupport(const std::vector<RegionPixel>& region, const cv::Mat& rays,
+                    const cv::Mat& depth_m, const cv::Mat& glass_mask, const Plane& frame_plane,
+                    const GlassFrameOptions& o) {
+  cv::Rect box(region.front().x, region.front().y, 1, 1);
+  for (const RegionPixel& p : region) box |= cv::Rect(p.x, p.y, 1, 1);
+  const cv::Rect window = cv::Rect(box.x - box.width / 2, box.y, 2 * box.width,
+                                   box.height + box.height / 2) &
+                          cv::Rect(0, 0, depth_m.cols, depth_m.rows);
+  const int step = std::max(1, static_cast<int>(std::sqrt(window.area() / 4000.0)));
+  const std::vector<Eigen::Vector3d> points = PointsIn(rays, depth_m, window, step, glass_mask);
+  Plane local;
+  constexpr int kMinPoints = 50;
+  if (static_cast<int>(points.size()) < kMinPoints || !FitPlane(points, o, &local) ||
+      local.inliers < kMinPoints)
+    return frame_plane;
+  return local;
 }
 
 }  // namespace
@@ -280,6 +328,7 @@ bool GlassFrameOptions::Check(std::string* message) const {
   FieldCheck c(message);
   c.Above("plane_inlier_m", plane_inlier_m, 0, kMaxDepthM, kFartherThanAnySensor)
       .In("plane_iterations", plane_iterations, 1, kMaxIterations * 100, "is more draws than useful")
+      .In("support_planes", support_planes, 1, 100, "is more planes than a frame holds")
       .In("plane_sample_step_px", plane_sample_step_px, 1, kMaxImageSidePx, kLargerThanAnyImage)
       .Above("shadow_relative_jump", shadow_relative_jump, 0, kMaxRelativeDepth,
              "is more than any depth ratio")
@@ -322,21 +371,25 @@ GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
   result.depth_filled = depth_m.clone();
   result.glass_mask = cv::Mat::zeros(depth_m.size(), CV_8U);
   const cv::Mat rays = PixelRays(camera);
-  result.plane_found = FitSupportPlane(rays, depth_m, options, &result);
+  const std::vector<Plane> planes =
+      SupportPlanes(PointsIn(rays, depth_m, cv::Rect(0, 0, depth_m.cols, depth_m.rows),
+                             options.plane_sample_step_px, cv::Mat()),
+                    options.support_planes, options);
+  result.plane_found = !planes.empty();
+  const Plane plane = result.plane_found ? planes.front() : Plane();
+  result.plane_normal = plane.normal, result.plane_offset_m = plane.offset;
+  result.plane_inliers = plane.inliers;
   if (!result.plane_found && given_mask.empty()) return result;
-  cv::Mat plane_t = result.plane_found
-                        ? PlaneDepth(rays, result.plane_normal, result.plane_offset_m)
-                        : cv::Mat::zeros(depth_m.size(), CV_32F);
-  // Pixels per metre at the support's typical depth (its median over the image).
+  // Pixels per metre at the frame's typical depth (the median reading).
   std::vector<float> depths;
-  for (int y = 0; y < plane_t.rows; y += 8)
-    for (int x = 0; x < plane_t.cols; x += 8)
-      if (plane_t.at<float>(y, x) > 0) depths.push_back(plane_t.at<float>(y, x));
+  for (int y = 0; y < depth_m.rows; y += 8)
+    for (int x = 0; x < depth_m.cols; x += 8)
+      if (depth_m.at<float>(y, x) > 0) depths.push_back(depth_m.at<float>(y, x));
   const double pixels_per_m = 0.5 * (camera.fx + camera.fy) / Median(depths, 1.f);
   result.glass_mask =
       !given_mask.empty()
           ? cv::Mat(given_mask != 0)
-          : FindGlassRegions(depth_m, plane_t, rays, result, options, pixels_per_m);
+          : FindGlassRegions(depth_m, rays, planes, options, pixels_per_m);
   cv::Mat labels;
   const int n = cv::connectedComponents(result.glass_mask, labels, 8, CV_32S);
   std::vector<std::vector<RegionPixel>> regions(std::max(0, n - 1));
@@ -349,9 +402,10 @@ GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
   for (const std::vector<RegionPixel>& region : regions) {
     GlassFrameRegion out;
     out.pixels = static_cast<int>(region.size());
-    if (result.plane_found)
-      ShapeRegion(region, plane_t, depth_m, result.plane_normal, options, &result.depth_filled,
-                  &out);
+    const Plane support =
+        RegionSupport(region, rays, depth_m, result.glass_mask, plane, options);
+    if (support.inliers > 0)
+      ShapeRegion(region, support, depth_m, options, &result.depth_filled, &out);
     result.replaced_pixels += out.replaced;
     result.regions.push_back(out);
   }

@@ -3,8 +3,9 @@
 //
 // A depth camera reads clear glass as a hole, or reads the surface behind it (the table, the
 // wall), rarely the glass itself. From one frame:
-//  1. the support plane (RANSAC over the frame's depth; the largest plane: a table, a shelf);
-//  2. where the glass is: holes over the support that are not a stereo or projector shadow (a
+//  1. the support planes (RANSAC over the frame's depth, largest first: a floor, a table, a
+//     wall), and for each object the plane read around its base;
+//  2. where the glass is: holes over the supports that are not a stereo or projector shadow (a
 //     shadow's run along its row lies between two depths far apart: the near edge and the far
 //     background; a hole in glass lies between readings of one surface), closed over small gaps,
 //     kept when large enough to be an object, each region's convex hull; or the caller's mask;
@@ -37,6 +38,9 @@ struct GlassFrameOptions {
   // sensor's noise at a metre or two, with room for a cloth or a mat.
   double plane_inlier_m = 0.01;
   int plane_iterations = 400;  // RANSAC draws of three points (a fixed seed: the same result)
+  // Planes glass may stand on or in (a table, a shelf, a wall), largest first; each must hold a
+  // twentieth of the frame's points.
+  int support_planes = 3;
   int plane_sample_step_px = 6;  // every n-th pixel each way is a RANSAC point
   // A hole run along a row whose two ends differ in depth by more than this share of the nearer
   // is a shadow (the foreground edge on one side, the background on the other), not glass.
