@@ -23,8 +23,7 @@ void AddFillFrameCommand(CLI::App& app) {
   cmd->add_option("--color", options->color_file, "colour image")->required();
   cmd->add_option("--depth", options->depth_file, "depth image, registered to the colour")
       ->required();
-  cmd->add_option("--camera", options->camera_file, "camera.json of the colour camera")
-      ->required();
+  cmd->add_option("--camera", options->camera_file, "camera.json of the colour camera")->required();
   cmd->add_option("--out", options->out_dir, "output folder (created if missing)")->required();
   cmd->add_option("--mask", options->mask_file,
                   "the glass's pixels (non-zero) when known: used instead of finding them");

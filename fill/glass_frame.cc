@@ -33,14 +33,17 @@ Eigen::Vector3d PointAt(const cv::Mat& rays, const cv::Mat& depth_m, int x, int 
   return Eigen::Vector3d(r[0] * z, r[1] * z, z);
 }
 
-// A plane through points: the one with the most within plane_inlier_m (RANSAC, a fixed seed),
-// refined by least squares over those; normal towards the camera. False when none has 3.
+// A plane in the camera frame, its normal towards the camera.
 struct Plane {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   double offset = 0;  // normal . p + offset = 0, > 0
-  int inliers = 0;
+  int inliers = 0;    // points within plane_inlier_m of it
 };
-bool FitPlane(const std::vector<Eigen::Vector3d>& points, const GlassFrameOptions& o, Plane* plane) {
+
+// A plane through points: the one with the most within plane_inlier_m (RANSAC, a fixed seed),
+// refined by least squares over those. False when none has 3.
+bool FitPlane(const std::vector<Eigen::Vector3d>& points, const GlassFrameOptions& o,
+              Plane* plane) {
   if (points.size() < 3) return false;
   std::mt19937 random(12345);
   std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
@@ -48,7 +51,8 @@ bool FitPlane(const std::vector<Eigen::Vector3d>& points, const GlassFrameOption
   Eigen::Vector3d best_n = Eigen::Vector3d::Zero();
   double best_d = 0;
   for (int it = 0; it < o.plane_iterations; ++it) {
-    const Eigen::Vector3d a = points[pick(random)], b = points[pick(random)], c = points[pick(random)];
+    const Eigen::Vector3d a = points[pick(random)], b = points[pick(random)],
+                          c = points[pick(random)];
     Eigen::Vector3d n = (b - a).cross(c - a);
     if (n.norm() < 1e-9) continue;
     n.normalize();
@@ -153,14 +157,12 @@ cv::Mat FindGlassRegions(const cv::Mat& depth_m, const cv::Mat& rays,
     cv::Mat on_plane(depth_m.size(), CV_8U, cv::Scalar(0));
     for (int y = 0; y < depth_m.rows; ++y)
       for (int x = 0; x < depth_m.cols; ++x)
-        if (depth_m.at<float>(y, x) > 0 &&
-            std::abs(plane.normal.dot(PointAt(rays, depth_m, x, y)) + plane.offset) <
-                o.plane_inlier_m)
+        if (depth_m.at<float>(y, x) > 0 && std::abs(plane.normal.dot(PointAt(rays, depth_m, x, y)) +
+                                                    plane.offset) < o.plane_inlier_m)
           on_plane.at<uint8_t>(y, x) = 255;
     extent |= SupportExtent(on_plane, pixels_per_m);
   }
-  cv::Mat evidence =
-      (depth_m <= 0) & extent & ~ShadowRuns(depth_m, o.shadow_relative_jump);
+  cv::Mat evidence = (depth_m <= 0) & extent & ~ShadowRuns(depth_m, o.shadow_relative_jump);
   const int k = std::max(3, static_cast<int>(o.close_m * pixels_per_m) | 1);
   cv::morphologyEx(evidence, evidence, cv::MORPH_CLOSE,
                    cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
@@ -309,9 +311,9 @@ Plane RegionSupport(const std::vector<RegionPixel>& region, const cv::Mat& rays,
                     const GlassFrameOptions& o) {
   cv::Rect box(region.front().x, region.front().y, 1, 1);
   for (const RegionPixel& p : region) box |= cv::Rect(p.x, p.y, 1, 1);
-  const cv::Rect window = cv::Rect(box.x - box.width / 2, box.y, 2 * box.width,
-                                   box.height + box.height / 2) &
-                          cv::Rect(0, 0, depth_m.cols, depth_m.rows);
+  const cv::Rect window =
+      cv::Rect(box.x - box.width / 2, box.y, 2 * box.width, box.height + box.height / 2) &
+      cv::Rect(0, 0, depth_m.cols, depth_m.rows);
   const int step = std::max(1, static_cast<int>(std::sqrt(window.area() / 4000.0)));
   const std::vector<Eigen::Vector3d> points = PointsIn(rays, depth_m, window, step, glass_mask);
   Plane local;
@@ -327,7 +329,8 @@ Plane RegionSupport(const std::vector<RegionPixel>& region, const cv::Mat& rays,
 bool GlassFrameOptions::Check(std::string* message) const {
   FieldCheck c(message);
   c.Above("plane_inlier_m", plane_inlier_m, 0, kMaxDepthM, kFartherThanAnySensor)
-      .In("plane_iterations", plane_iterations, 1, kMaxIterations * 100, "is more draws than useful")
+      .In("plane_iterations", plane_iterations, 1, kMaxIterations * 100,
+          "is more draws than useful")
       .In("support_planes", support_planes, 1, 100, "is more planes than a frame holds")
       .In("plane_sample_step_px", plane_sample_step_px, 1, kMaxImageSidePx, kLargerThanAnyImage)
       .Above("shadow_relative_jump", shadow_relative_jump, 0, kMaxRelativeDepth,
@@ -361,11 +364,12 @@ GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
                                   const cv::Mat& given_mask) {
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
-  GF_CHECK(depth_m.type() == CV_32FC1 && depth_m.cols == camera.width &&
-               depth_m.rows == camera.height,
-           "depth must be CV_32F metres at the camera's size");
-  GF_CHECK(given_mask.empty() || (given_mask.type() == CV_8UC1 && given_mask.size() == depth_m.size()),
-           "the given mask must be CV_8U at the depth's size");
+  GF_CHECK(
+      depth_m.type() == CV_32FC1 && depth_m.cols == camera.width && depth_m.rows == camera.height,
+      "depth must be CV_32F metres at the camera's size");
+  GF_CHECK(
+      given_mask.empty() || (given_mask.type() == CV_8UC1 && given_mask.size() == depth_m.size()),
+      "the given mask must be CV_8U at the depth's size");
   GF_CHECK(color.empty() || color.size() == depth_m.size(), "colour and depth differ in size");
   GlassFrameResult result;
   result.depth_filled = depth_m.clone();
@@ -386,10 +390,9 @@ GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
     for (int x = 0; x < depth_m.cols; x += 8)
       if (depth_m.at<float>(y, x) > 0) depths.push_back(depth_m.at<float>(y, x));
   const double pixels_per_m = 0.5 * (camera.fx + camera.fy) / Median(depths, 1.f);
-  result.glass_mask =
-      !given_mask.empty()
-          ? cv::Mat(given_mask != 0)
-          : FindGlassRegions(depth_m, rays, planes, options, pixels_per_m);
+  result.glass_mask = !given_mask.empty()
+                          ? cv::Mat(given_mask != 0)
+                          : FindGlassRegions(depth_m, rays, planes, options, pixels_per_m);
   cv::Mat labels;
   const int n = cv::connectedComponents(result.glass_mask, labels, 8, CV_32S);
   std::vector<std::vector<RegionPixel>> regions(std::max(0, n - 1));
@@ -402,8 +405,7 @@ GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
   for (const std::vector<RegionPixel>& region : regions) {
     GlassFrameRegion out;
     out.pixels = static_cast<int>(region.size());
-    const Plane support =
-        RegionSupport(region, rays, depth_m, result.glass_mask, plane, options);
+    const Plane support = RegionSupport(region, rays, depth_m, result.glass_mask, plane, options);
     if (support.inliers > 0)
       ShapeRegion(region, support, depth_m, options, &result.depth_filled, &out);
     result.replaced_pixels += out.replaced;

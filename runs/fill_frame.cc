@@ -106,8 +106,8 @@ cv::Mat ReadMetricDepth(const std::string& path, double depth_scale) {
     }
     return CleanMetres(path, m);
   }
-  for (const char* ext : {".xml", ".yml", ".yaml", ".json", ".xml.gz", ".yml.gz", ".yaml.gz",
-                          ".json.gz"})
+  for (const char* ext :
+       {".xml", ".yml", ".yaml", ".json", ".xml.gz", ".yml.gz", ".yaml.gz", ".json.gz"})
     if (EndsWith(path, ext)) return ReadFileStorageDepth(path);
   const cv::Mat raw = ReadDepthImage(path);
   cv::Mat depth_m;
