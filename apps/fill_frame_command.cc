@@ -1,5 +1,7 @@
 // `glassfusion fill-frame`: its options and help, on the CLI11 app (commands.cc registers it).
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include "apps/commands.h"
 #include "runs/fill_frame.h"
@@ -27,7 +29,12 @@ void AddFillFrameCommand(CLI::App& app) {
   cmd->add_option("--out", options->out_dir, "output folder (created if missing)")->required();
   cmd->add_option("--mask", options->mask_file,
                   "the glass's pixels (non-zero) when known: used instead of finding them");
-  cmd->callback([options] {
+  auto boxes = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("--box", *boxes,
+                  "x,y,w,h: a box round one glass object (colour pixels; repeat for each): the "
+                  "glass in it is cut out by colour (GrabCut) instead of found from the depth");
+  cmd->callback([options, boxes] {
+    for (const std::string& box : *boxes) options->boxes.push_back(ParseBox(box, "--box"));
     std::cout << "fill-frame: " << RunFillFrame(*options).BriefReport() << std::endl;
   });
 }

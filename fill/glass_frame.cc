@@ -359,6 +359,33 @@ std::string GlassFrameResult::BriefReport() const {
   return buffer;
 }
 
+cv::Mat GlassMaskFromBoxes(const cv::Mat& color, const std::vector<cv::Rect>& boxes,
+                           int iterations) {
+  GF_CHECK(color.type() == CV_8UC3, "GrabCut needs a CV_8UC3 colour image");
+  GF_CHECK(iterations > 0, "GrabCut needs at least one iteration");
+  cv::Mat mask(color.size(), CV_8U, cv::Scalar(0));
+  const cv::Rect image(0, 0, color.cols, color.rows);
+  for (const cv::Rect& asked : boxes) {
+    const cv::Rect box = asked & image;
+    if (box.width < 2 || box.height < 2) continue;
+    // GrabCut starts its colour models from k-means on OpenCV's per-thread generator: seeded here
+    // (and given back), so that a box gives the same mask whatever ran before.
+    const uint64 state = cv::theRNG().state;
+    cv::theRNG().state = 0x9E3779B97F4A7C15ull;
+    // On the box and a quarter of its size round it (the background's colours near the object;
+    // the whole image only costs time).
+    const cv::Rect around = cv::Rect(box.x - box.width / 4, box.y - box.height / 4,
+                                     box.width * 3 / 2, box.height * 3 / 2) &
+                            image;
+    cv::Mat labels, background, foreground;
+    cv::grabCut(color(around), labels, box - around.tl(), background, foreground, iterations,
+                cv::GC_INIT_WITH_RECT);
+    cv::theRNG().state = state;
+    mask(around).setTo(255, (labels == cv::GC_FGD) | (labels == cv::GC_PR_FGD));
+  }
+  return mask;
+}
+
 GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
                                   const Camera& camera, const GlassFrameOptions& options,
                                   const cv::Mat& given_mask) {

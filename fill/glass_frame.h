@@ -80,6 +80,13 @@ struct GlassFrameResult {
   std::string BriefReport() const;
 };
 
+// The glass inside boxes a person drew round each glass object (image pixels): OpenCV's GrabCut
+// (Rother et al. 2004) on each box and a quarter of its size round it, started from the box
+// (iterations rounds), the union of what it keeps; CV_8U, 255 = glass. The same boxes give the same mask (GrabCut's random start is
+// seeded). A box outside the image is clipped; one with nothing left is skipped.
+cv::Mat GlassMaskFromBoxes(const cv::Mat& color, const std::vector<cv::Rect>& boxes,
+                           int iterations = 5);
+
 // color: CV_8UC3 (may be empty; unused today); depth_m: CV_32F metres, 0 = no reading, at the
 // camera's size; given_mask: CV_8U at the same size (non-zero = glass) to skip step 2, or empty.
 GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,

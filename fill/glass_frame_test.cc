@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 
 namespace gf {
 namespace {
@@ -134,6 +135,23 @@ TEST(GlassFrame, NoGlassOnABareTable) {
   const GlassFrameResult none = FindGlassInFrame(cv::Mat(), scene.sensor, scene.camera, {});
   EXPECT_FALSE(none.plane_found);
   EXPECT_EQ(cv::countNonZero(none.glass_mask), 0);
+}
+
+TEST(GlassMaskFromBoxes, CutsTheObjectOutOfItsBoxTheSameEveryTime) {
+  // A pale disc on a mottled blue cloth (as glass shows the cloth, a little lighter).
+  cv::Mat color(240, 320, CV_8UC3);
+  cv::RNG noise(7);
+  noise.fill(color, cv::RNG::UNIFORM, cv::Scalar(150, 60, 20), cv::Scalar(200, 110, 60));
+  cv::GaussianBlur(color, color, cv::Size(5, 5), 2);
+  cv::Mat truth = cv::Mat::zeros(color.size(), CV_8U);
+  cv::circle(truth, cv::Point(160, 120), 40, cv::Scalar(255), cv::FILLED);
+  color.setTo(cv::Scalar(225, 215, 205), truth);
+  const std::vector<cv::Rect> boxes = {cv::Rect(110, 70, 100, 100), cv::Rect(400, 10, 20, 20)};
+  const cv::Mat mask = GlassMaskFromBoxes(color, boxes);
+  EXPECT_GT(IoU(mask, truth), 0.9);
+  cv::theRNG().next();  // whatever ran before, the same boxes give the same mask
+  EXPECT_EQ(cv::countNonZero(GlassMaskFromBoxes(color, boxes) != mask), 0);
+  EXPECT_EQ(cv::countNonZero(GlassMaskFromBoxes(color, {cv::Rect(400, 10, 20, 20)})), 0);
 }
 
 TEST(GlassFrameOptions, CheckNamesTheField) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -64,7 +65,9 @@ nlohmann::ordered_json Report(const FillFrameOptions& o, const FillFrameSummary&
   return {{"color", o.color_file},
           {"depth", o.depth_file},
           {"camera", o.camera_file},
-          {"mask", o.mask_file.empty() ? "found" : o.mask_file},
+          {"mask", !o.mask_file.empty() ? o.mask_file
+                   : o.boxes.empty()    ? "found"
+                                        : "boxes"},
           {"depth_pixels", s.depth_pixels},
           {"support_plane",
            {{"found", r.plane_found},
@@ -92,6 +95,14 @@ cv::Mat Overlay(const cv::Mat& color, const cv::Mat& depth_m, const GlassFrameRe
 }  // namespace
 
 std::string FillFrameSummary::BriefReport() const { return result.BriefReport(); }
+
+cv::Rect ParseBox(const std::string& text, const std::string& what) {
+  int x = 0, y = 0, w = 0, h = 0;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%d,%d,%d,%d%c", &x, &y, &w, &h, &tail) != 4 || w <= 0 || h <= 0)
+    throw InputError(what, "'" + text + "' is not a box x,y,w,h (pixels, w and h above 0)");
+  return cv::Rect(x, y, w, h);
+}
 
 cv::Mat ReadMetricDepth(const std::string& path, double depth_scale) {
   if (!std::filesystem::is_regular_file(path)) throw InputError(path, "no such file");
@@ -130,6 +141,9 @@ FillFrameSummary RunFillFrame(const FillFrameOptions& o) {
   const cv::Mat color = ReadColorImage(o.color_file);
   if (color.size() != size) throw InputError(o.color_file, "is not at the camera's size");
   cv::Mat mask;
+  if (!o.mask_file.empty() && !o.boxes.empty())
+    throw InputError(o.mask_file, "give the glass as a mask or as boxes, not both");
+  if (!o.boxes.empty()) mask = GlassMaskFromBoxes(color, o.boxes);
   if (!o.mask_file.empty()) {
     mask = cv::imread(o.mask_file, cv::IMREAD_GRAYSCALE);
     if (mask.empty()) throw InputError(o.mask_file, "cannot be decoded as an image");

@@ -13,6 +13,7 @@
 
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 #include "fill/glass_frame.h"
 
@@ -24,6 +25,9 @@ struct FillFrameOptions {
   std::string camera_file;  // camera.json (acquisition/camera.h)
   std::string out_dir;      // created if missing; only the four files named above are written
   std::string mask_file;    // optional: the glass's pixels (non-zero), to skip finding them
+  // Optional, instead of mask_file: a box round each glass object (colour pixels); the glass in
+  // each is cut out by colour (GlassMaskFromBoxes).
+  std::vector<cv::Rect> boxes;
   GlassFrameOptions glass;
 };
 
@@ -36,6 +40,9 @@ struct FillFrameSummary {
 // Metric depth (CV_32F, 0 = hole) from a depth file as above; depth_scale: PNG/PGM units per
 // metre. Throws InputError naming the file when it cannot be read or holds no depth image.
 cv::Mat ReadMetricDepth(const std::string& path, double depth_scale);
+
+// A box "x,y,w,h" (pixels, w and h > 0); throws InputError naming `what` when it is not one.
+cv::Rect ParseBox(const std::string& text, const std::string& what);
 
 // Reads, finds the glass, writes. Throws InputError (one line naming the file) on bad input.
 FillFrameSummary RunFillFrame(const FillFrameOptions& options);
