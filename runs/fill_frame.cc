@@ -1,6 +1,7 @@
 #include "runs/fill_frame.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -152,7 +153,11 @@ FillFrameSummary RunFillFrame(const FillFrameOptions& o) {
   FillFrameSummary s;
   s.depth_pixels = cv::countNonZero(depth > 0);
   s.result = FindGlassInFrame(color, depth, camera.camera, o.glass, mask);
-  std::filesystem::create_directories(o.out_dir);
+  std::error_code error;
+  std::filesystem::create_directories(o.out_dir, error);
+  if (!std::filesystem::is_directory(o.out_dir))
+    throw InputError(o.out_dir, "cannot be made a folder" +
+                                    (error ? " (" + error.message() + ")" : std::string()));
   const std::filesystem::path out(o.out_dir);
   WriteImage((out / "glass_mask.png").string(), s.result.glass_mask);
   WriteImage((out / "depth_filled.png").string(),

@@ -71,6 +71,18 @@ TEST(RunFillFrame, BadInputNamesTheFile) {
   EXPECT_THROW(RunFillFrame(o), InputError);
   EXPECT_FALSE(std::filesystem::exists(dir / "out"));  // nothing written on bad input
   o.color_file = dir / "c.png";
+  std::ofstream(dir / "a_file") << "the user's";
+  o.out_dir = dir / "a_file";  // an output folder that is a file: refused, the file kept
+  try {
+    RunFillFrame(o);
+    FAIL() << "no error for an output folder that is a file";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), dir / "a_file");
+  }
+  std::string kept;
+  std::getline(std::ifstream(dir / "a_file"), kept);
+  EXPECT_EQ(kept, "the user's");
+  o.out_dir = dir / "out";
   const FillFrameSummary s = RunFillFrame(o);  // a bare table: no glass, depth as read
   EXPECT_TRUE(s.result.plane_found);
   EXPECT_EQ(s.result.replaced_pixels, 0);
