@@ -359,14 +359,14 @@ std::string GlassFrameResult::BriefReport() const {
   return buffer;
 }
 
-cv::Mat GlassMaskFromBoxes(const cv::Mat& color, const std::vector<cv::Rect>& boxes,
-                           int iterations) {
+cv::Mat GlassRegionsFromBoxes(const cv::Mat& color, const std::vector<cv::Rect>& boxes,
+                              int iterations) {
   GF_CHECK(color.type() == CV_8UC3, "GrabCut needs a CV_8UC3 colour image");
   GF_CHECK(iterations > 0, "GrabCut needs at least one iteration");
-  cv::Mat mask(color.size(), CV_8U, cv::Scalar(0));
+  cv::Mat regions(color.size(), CV_32S, cv::Scalar(0));
   const cv::Rect image(0, 0, color.cols, color.rows);
-  for (const cv::Rect& asked : boxes) {
-    const cv::Rect box = asked & image;
+  for (size_t k = 0; k < boxes.size(); ++k) {
+    const cv::Rect box = boxes[k] & image;
     if (box.width < 2 || box.height < 2) continue;
     // GrabCut starts its colour models from k-means on OpenCV's per-thread generator: seeded here
     // (and given back), so that a box gives the same mask whatever ran before.
@@ -381,22 +381,23 @@ cv::Mat GlassMaskFromBoxes(const cv::Mat& color, const std::vector<cv::Rect>& bo
     cv::grabCut(color(around), labels, box - around.tl(), background, foreground, iterations,
                 cv::GC_INIT_WITH_RECT);
     cv::theRNG().state = state;
-    mask(around).setTo(255, (labels == cv::GC_FGD) | (labels == cv::GC_PR_FGD));
+    regions(around).setTo(static_cast<int>(k + 1),
+                          (labels == cv::GC_FGD) | (labels == cv::GC_PR_FGD));
   }
-  return mask;
+  return regions;
 }
 
 GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
                                   const Camera& camera, const GlassFrameOptions& options,
-                                  const cv::Mat& given_mask) {
+                                  const cv::Mat& given) {
   std::string problem;
   GF_CHECK(options.Check(&problem), problem);
   GF_CHECK(
       depth_m.type() == CV_32FC1 && depth_m.cols == camera.width && depth_m.rows == camera.height,
       "depth must be CV_32F metres at the camera's size");
-  GF_CHECK(
-      given_mask.empty() || (given_mask.type() == CV_8UC1 && given_mask.size() == depth_m.size()),
-      "the given mask must be CV_8U at the depth's size");
+  GF_CHECK(given.empty() || ((given.type() == CV_8UC1 || given.type() == CV_32SC1) &&
+                             given.size() == depth_m.size()),
+           "the given glass must be CV_8U or CV_32S at the depth's size");
   GF_CHECK(color.empty() || color.size() == depth_m.size(), "colour and depth differ in size");
   GlassFrameResult result;
   result.depth_filled = depth_m.clone();
@@ -410,18 +411,26 @@ GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
   const Plane plane = result.plane_found ? planes.front() : Plane();
   result.plane_normal = plane.normal, result.plane_offset_m = plane.offset;
   result.plane_inliers = plane.inliers;
-  if (!result.plane_found && given_mask.empty()) return result;
+  if (!result.plane_found && given.empty()) return result;
   // Pixels per metre at the frame's typical depth (the median reading).
   std::vector<float> depths;
   for (int y = 0; y < depth_m.rows; y += 8)
     for (int x = 0; x < depth_m.cols; x += 8)
       if (depth_m.at<float>(y, x) > 0) depths.push_back(depth_m.at<float>(y, x));
   const double pixels_per_m = 0.5 * (camera.fx + camera.fy) / Median(depths, 1.f);
-  result.glass_mask = !given_mask.empty()
-                          ? cv::Mat(given_mask != 0)
+  result.glass_mask = !given.empty()
+                          ? cv::Mat(given != 0)
                           : FindGlassRegions(depth_m, rays, planes, options, pixels_per_m);
   cv::Mat labels;
-  const int n = cv::connectedComponents(result.glass_mask, labels, 8, CV_32S);
+  int n = 0;
+  if (given.type() == CV_32SC1) {
+    labels = cv::max(given, 0);
+    double most = 0;
+    cv::minMaxLoc(labels, nullptr, &most);
+    n = static_cast<int>(most) + 1;
+  } else {
+    n = cv::connectedComponents(result.glass_mask, labels, 8, CV_32S);
+  }
   std::vector<std::vector<RegionPixel>> regions(std::max(0, n - 1));
   for (int y = 0; y < labels.rows; ++y)
     for (int x = 0; x < labels.cols; ++x)
@@ -430,6 +439,7 @@ GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
         regions[label - 1].push_back({x, y, Eigen::Vector3d(r[0], r[1], r[2])});
       }
   for (const std::vector<RegionPixel>& region : regions) {
+    if (region.empty()) continue;  // a label given with no pixels
     GlassFrameRegion out;
     out.pixels = static_cast<int>(region.size());
     const Plane support = RegionSupport(region, rays, depth_m, result.glass_mask, plane, options);

@@ -82,15 +82,17 @@ struct GlassFrameResult {
 
 // The glass inside boxes a person drew round each glass object (image pixels): OpenCV's GrabCut
 // (Rother et al. 2004) on each box and a quarter of its size round it, started from the box
-// (iterations rounds), the union of what it keeps; CV_8U, 255 = glass. The same boxes give the same mask (GrabCut's random start is
-// seeded). A box outside the image is clipped; one with nothing left is skipped.
-cv::Mat GlassMaskFromBoxes(const cv::Mat& color, const std::vector<cv::Rect>& boxes,
-                           int iterations = 5);
+// (iterations rounds). CV_32S: k + 1 where box k keeps a pixel (one object per box; where boxes
+// overlap, the later box's), 0 elsewhere. The same boxes give the same regions (GrabCut's random
+// start is seeded). A box outside the image is clipped; one with nothing left is skipped.
+cv::Mat GlassRegionsFromBoxes(const cv::Mat& color, const std::vector<cv::Rect>& boxes,
+                              int iterations = 5);
 
 // color: CV_8UC3 (may be empty; unused today); depth_m: CV_32F metres, 0 = no reading, at the
-// camera's size; given_mask: CV_8U at the same size (non-zero = glass) to skip step 2, or empty.
+// camera's size. given: the glass, to skip step 2: CV_8U (non-zero = glass, each connected piece
+// one object) or CV_32S (label > 0 = glass, one object per label), at the same size; or empty.
 GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
                                   const Camera& camera, const GlassFrameOptions& options,
-                                  const cv::Mat& given_mask = cv::Mat());
+                                  const cv::Mat& given = cv::Mat());
 
 }  // namespace gf

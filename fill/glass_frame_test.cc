@@ -137,21 +137,42 @@ TEST(GlassFrame, NoGlassOnABareTable) {
   EXPECT_EQ(cv::countNonZero(none.glass_mask), 0);
 }
 
-TEST(GlassMaskFromBoxes, CutsTheObjectOutOfItsBoxTheSameEveryTime) {
-  // A pale disc on a mottled blue cloth (as glass shows the cloth, a little lighter).
+TEST(GlassRegionsFromBoxes, CutsEachObjectOutOfItsBoxTheSameEveryTime) {
+  // Two pale discs side by side on a mottled blue cloth (as glass shows the cloth, a little
+  // lighter), a box round each that overlaps the other's.
   cv::Mat color(240, 320, CV_8UC3);
   cv::RNG noise(7);
   noise.fill(color, cv::RNG::UNIFORM, cv::Scalar(150, 60, 20), cv::Scalar(200, 110, 60));
   cv::GaussianBlur(color, color, cv::Size(5, 5), 2);
-  cv::Mat truth = cv::Mat::zeros(color.size(), CV_8U);
-  cv::circle(truth, cv::Point(160, 120), 40, cv::Scalar(255), cv::FILLED);
-  color.setTo(cv::Scalar(225, 215, 205), truth);
-  const std::vector<cv::Rect> boxes = {cv::Rect(110, 70, 100, 100), cv::Rect(400, 10, 20, 20)};
-  const cv::Mat mask = GlassMaskFromBoxes(color, boxes);
-  EXPECT_GT(IoU(mask, truth), 0.9);
-  cv::theRNG().next();  // whatever ran before, the same boxes give the same mask
-  EXPECT_EQ(cv::countNonZero(GlassMaskFromBoxes(color, boxes) != mask), 0);
-  EXPECT_EQ(cv::countNonZero(GlassMaskFromBoxes(color, {cv::Rect(400, 10, 20, 20)})), 0);
+  cv::Mat first = cv::Mat::zeros(color.size(), CV_8U), second = first.clone();
+  cv::circle(first, cv::Point(110, 120), 40, cv::Scalar(255), cv::FILLED);
+  cv::circle(second, cv::Point(195, 120), 40, cv::Scalar(255), cv::FILLED);
+  color.setTo(cv::Scalar(225, 215, 205), first | second);
+  const std::vector<cv::Rect> boxes = {cv::Rect(60, 70, 100, 100), cv::Rect(145, 70, 100, 100),
+                                       cv::Rect(400, 10, 20, 20)};
+  const cv::Mat regions = GlassRegionsFromBoxes(color, boxes);
+  ASSERT_EQ(regions.type(), CV_32SC1);
+  EXPECT_GT(IoU(regions == 1, first & ~second), 0.85);
+  EXPECT_GT(IoU(regions == 2, second), 0.85);
+  EXPECT_EQ(cv::countNonZero(regions == 3), 0);  // outside the image
+  cv::theRNG().next();  // whatever ran before, the same boxes give the same regions
+  EXPECT_EQ(cv::countNonZero(GlassRegionsFromBoxes(color, boxes) != regions), 0);
+}
+
+TEST(GlassFrame, GivenLabelsAreOneObjectEach) {
+  const Scene scene(false);
+  // The glass given as two labels, its left and right parts, and label 4 on a patch of table
+  // (label 3 has no pixels): three objects, not one.
+  cv::Mat labels(scene.glass.size(), CV_32S, cv::Scalar(0));
+  labels.setTo(1, scene.glass);
+  cv::Mat right = labels.colRange(labels.cols / 2 + 50, labels.cols);
+  right.setTo(2, right == 1);
+  ASSERT_GT(cv::countNonZero(labels == 1), 0);
+  ASSERT_GT(cv::countNonZero(labels == 2), 0);
+  labels(cv::Rect(20, 400, 10, 10)).setTo(4);
+  const GlassFrameResult r = FindGlassInFrame(cv::Mat(), scene.sensor, scene.camera, {}, labels);
+  EXPECT_EQ(cv::countNonZero(r.glass_mask), cv::countNonZero(scene.glass) + 100);
+  EXPECT_EQ(r.regions.size(), 3u);
 }
 
 TEST(GlassFrameOptions, CheckNamesTheField) {

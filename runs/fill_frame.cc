@@ -144,7 +144,7 @@ FillFrameSummary RunFillFrame(const FillFrameOptions& o) {
   cv::Mat mask;
   if (!o.mask_file.empty() && !o.boxes.empty())
     throw InputError(o.mask_file, "give the glass as a mask or as boxes, not both");
-  if (!o.boxes.empty()) mask = GlassMaskFromBoxes(color, o.boxes);
+  if (!o.boxes.empty()) mask = GlassRegionsFromBoxes(color, o.boxes);
   if (!o.mask_file.empty()) {
     mask = cv::imread(o.mask_file, cv::IMREAD_GRAYSCALE);
     if (mask.empty()) throw InputError(o.mask_file, "cannot be decoded as an image");

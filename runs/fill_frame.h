@@ -26,7 +26,7 @@ struct FillFrameOptions {
   std::string out_dir;      // created if missing; only the four files named above are written
   std::string mask_file;    // optional: the glass's pixels (non-zero), to skip finding them
   // Optional, instead of mask_file: a box round each glass object (colour pixels); the glass in
-  // each is cut out by colour (GlassMaskFromBoxes).
+  // each is cut out by colour (GlassRegionsFromBoxes), one object per box.
   std::vector<cv::Rect> boxes;
   GlassFrameOptions glass;
 };
