@@ -90,7 +90,8 @@ cv::Mat GlassRegionsFromBoxes(const cv::Mat& color, const std::vector<cv::Rect>&
 
 // color: CV_8UC3 (may be empty; unused today); depth_m: CV_32F metres, 0 = no reading, at the
 // camera's size. given: the glass, to skip step 2: CV_8U (non-zero = glass, each connected piece
-// one object) or CV_32S (label > 0 = glass, one object per label), at the same size; or empty.
+// one object) or CV_32S (label > 0 = glass, one object per label, labels 1..N with N the number
+// of objects, as GlassRegionsFromBoxes gives), at the same size; or empty.
 GlassFrameResult FindGlassInFrame(const cv::Mat& color, const cv::Mat& depth_m,
                                   const Camera& camera, const GlassFrameOptions& options,
                                   const cv::Mat& given = cv::Mat());
