@@ -18,13 +18,6 @@ void RequireFile(const std::string& path) {
   if (!IsRegularFile(path)) throw InputError(path, "file not found");
 }
 
-bool HasExtension(const std::string& path, const std::string& ext) {
-  if (path.size() < ext.size()) return false;
-  std::string tail = path.substr(path.size() - ext.size());
-  for (char& c : tail) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return tail == ext;
-}
-
 // Reads the next header token of a Netpbm file, skipping whitespace and # comments.
 bool NextToken(std::istream& in, std::string* token) {
   token->clear();
@@ -89,6 +82,13 @@ std::optional<cv::Size> JpegSize(std::istream& in) {
 }
 
 }  // namespace
+
+bool HasExtension(const std::string& path, const std::string& ext) {
+  if (path.size() < ext.size()) return false;
+  std::string tail = path.substr(path.size() - ext.size());
+  for (char& c : tail) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return tail == ext;
+}
 
 std::optional<cv::Size> ReadImageSize(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

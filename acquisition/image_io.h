@@ -27,6 +27,9 @@ std::optional<cv::Size> ReadImageSize(const std::string& path);
 enum class PgmByteOrder { kAuto, kBigEndian, kLittleEndian };
 cv::Mat ReadPgm16(const std::string& path, PgmByteOrder order = PgmByteOrder::kAuto);
 
+// Whether path ends in ext (".png", ".xml.gz"; ext in lower case), whatever the case of path.
+bool HasExtension(const std::string& path, const std::string& ext);
+
 // Atomic image writers (temporary name, then rename); throw InputError when encoding fails.
 void WriteImage(const std::string& path, const cv::Mat& image);
 

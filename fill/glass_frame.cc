@@ -187,15 +187,15 @@ struct RegionPixel {
   Eigen::Vector3d ray;  // (x/z, y/z, 1)
 };
 
-// The point of the axis (base + u * axis) nearest the ray s * r: the ray's parameter s, the
-// height u and the distance between them.
+// Where the ray s * r passes the axis (base + u * axis) nearest: the height u there and the
+// distance between them.
 void NearestToAxis(const Eigen::Vector3d& r, const Eigen::Vector3d& base,
-                   const Eigen::Vector3d& axis, double* s, double* u, double* distance) {
+                   const Eigen::Vector3d& axis, double* u, double* distance) {
   const double ra = r.dot(axis), rr = r.dot(r), rb = r.dot(base), ba = base.dot(axis);
   const double den = rr - ra * ra;
-  *s = den > 1e-12 ? (rb - ra * ba) / den : 0.0;
-  *u = *s * ra - ba;
-  *distance = (*s * r - base - *u * axis).norm();
+  const double s = den > 1e-12 ? (rb - ra * ba) / den : 0.0;
+  *u = s * ra - ba;
+  *distance = (s * r - base - *u * axis).norm();
 }
 
 // Nearest-the-camera solution s of |(s r - base) - ((s r - base) . axis) axis| = radius.
@@ -229,8 +229,8 @@ std::map<int, double> Profile(const std::vector<RegionPixel>& region, const Eige
     std::map<int, std::vector<double>> by_step;
     for (const auto& [row, ends] : row_ends)
       for (int i : {ends.first, ends.second}) {
-        double s, u, distance;
-        NearestToAxis(region[i].ray, base, axis, &s, &u, &distance);
+        double u, distance;
+        NearestToAxis(region[i].ray, base, axis, &u, &distance);
         const int step = static_cast<int>(std::floor(u / o.height_step_m));
         if (step >= -3) by_step[step].push_back(distance);
       }
@@ -245,10 +245,6 @@ std::map<int, double> Profile(const std::vector<RegionPixel>& region, const Eige
   }
   return profile;
 }
-
-}  // namespace
-
-namespace {
 
 // Steps 3 and 4 for one region: fits the standing surface of revolution and puts its depth in
 // depth_filled where the sensor read nothing or read through it.
@@ -285,8 +281,8 @@ void ShapeRegion(const std::vector<RegionPixel>& region, const Plane& support,
   for (const RegionPixel& p : region) {
     // The radius at the height where the ray passes the axis nearest (where a silhouette ray
     // grazes the surface: the heights the profile was measured at).
-    double s, u, distance, z = 0;
-    NearestToAxis(p.ray, base, axis, &s, &u, &distance);
+    double u, distance, z = 0;
+    NearestToAxis(p.ray, base, axis, &u, &distance);
     const auto step = profile.find(static_cast<int>(std::floor(u / o.height_step_m)));
     if (step == profile.end() || !FrontOfCylinder(p.ray, base, axis, step->second, &z)) continue;
     out->height_m = std::max(out->height_m, static_cast<float>((z * p.ray - base).dot(axis)));

@@ -75,6 +75,13 @@ int CompleteFromModel(const cv::Mat& hole_mask, const MapCompletion& offer, cv::
   return cv::countNonZero(*completed);
 }
 
+void TintOverlay(const cv::Mat& color, const cv::Mat& mask, const cv::Scalar& tint,
+                 cv::Mat* overlay) {
+  cv::Mat tinted;
+  cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, tint), 0.5, 0, tinted);
+  tinted.copyTo(*overlay, mask);
+}
+
 cv::Mat FillOverlay(const cv::Mat& color, const CarriedFillResult& fill) {
   cv::Mat out = color.clone();
   for (int y = 0; y < out.rows; ++y)
@@ -186,15 +193,8 @@ int FolderRunSink::CompleteKeyframe(const std::string& name, const MapCompletion
   const cv::Mat color = cv::imread(run.Path(name, KeyframeImage::kColor), cv::IMREAD_COLOR);
   cv::Mat overlay = cv::imread(run.Path(name, KeyframeImage::kFillOverlay), cv::IMREAD_COLOR);
   if (!color.empty() && color.size() == overlay.size() && color.size() == completed.size()) {
-    cv::Mat tinted;
-    cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(0, 165, 255)), 0.5, 0,
-                    tinted);
-    tinted.copyTo(overlay, completed);
-    if (any_glass) {
-      cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(255, 200, 0)), 0.5,
-                      0, tinted);
-      tinted.copyTo(overlay, offer.glass);
-    }
+    TintOverlay(color, completed, kCompletedTint, &overlay);
+    if (any_glass) TintOverlay(color, offer.glass, kGlassTint, &overlay);
     WriteImage(File(RunLayout::Keyframe(name, KeyframeImage::kFillOverlay)), overlay);
   }
   if (pixels == 0) return 0;

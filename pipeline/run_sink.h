@@ -170,4 +170,12 @@ int CompleteFromModel(const cv::Mat& hole_mask, const MapCompletion& offer, cv::
 // The overlay written as <ts>.fill_overlay.png (see above).
 cv::Mat FillOverlay(const cv::Mat& color, const CarriedFillResult& fill);
 
+// The tints (BGR) overlays give pixels the map completed (orange) and clear glass (cyan).
+inline const cv::Scalar kCompletedTint(0, 165, 255);
+inline const cv::Scalar kGlassTint(255, 200, 0);
+// *overlay takes, on mask's pixels, color half-mixed with tint (color and *overlay CV_8UC3, mask
+// CV_8U, all one size).
+void TintOverlay(const cv::Mat& color, const cv::Mat& mask, const cv::Scalar& tint,
+                 cv::Mat* overlay);
+
 }  // namespace gf

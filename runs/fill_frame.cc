@@ -1,7 +1,5 @@
 #include "runs/fill_frame.h"
 
-#include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -15,14 +13,10 @@
 #include "acquisition/file_util.h"
 #include "acquisition/image_io.h"
 #include "acquisition/json_text.h"
+#include "pipeline/run_sink.h"
 
 namespace gf {
 namespace {
-
-bool EndsWith(std::string s, const std::string& tail) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
-}
 
 // The single-channel float image in `m` (its first channel), holes where not finite or <= 0.
 cv::Mat CleanMetres(const std::string& path, const cv::Mat& m) {
@@ -83,13 +77,9 @@ nlohmann::ordered_json Report(const FillFrameOptions& o, const FillFrameSummary&
 // The colour image with the glass found tinted cyan and the pixels given its depth orange (as a
 // run's fill_overlay.png shows glass and completed pixels).
 cv::Mat Overlay(const cv::Mat& color, const cv::Mat& depth_m, const GlassFrameResult& r) {
-  cv::Mat overlay = color.clone(), tinted;
-  cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(255, 200, 0)), 0.5, 0,
-                  tinted);
-  tinted.copyTo(overlay, r.glass_mask);
-  cv::addWeighted(color, 0.5, cv::Mat(color.size(), CV_8UC3, cv::Scalar(0, 165, 255)), 0.5, 0,
-                  tinted);
-  tinted.copyTo(overlay, r.depth_filled != depth_m);
+  cv::Mat overlay = color.clone();
+  TintOverlay(color, r.glass_mask, kGlassTint, &overlay);
+  TintOverlay(color, r.depth_filled != depth_m, kCompletedTint, &overlay);
   return overlay;
 }
 
@@ -107,7 +97,7 @@ cv::Rect ParseBox(const std::string& text, const std::string& what) {
 
 cv::Mat ReadMetricDepth(const std::string& path, double depth_scale) {
   if (!std::filesystem::is_regular_file(path)) throw InputError(path, "no such file");
-  if (EndsWith(path, ".exr")) {
+  if (HasExtension(path, ".exr")) {
     // OpenCV decodes OpenEXR only when this is set before its first EXR read.
     setenv("OPENCV_IO_ENABLE_OPENEXR", "1", 0);
     cv::Mat m;
@@ -120,7 +110,7 @@ cv::Mat ReadMetricDepth(const std::string& path, double depth_scale) {
   }
   for (const char* ext :
        {".xml", ".yml", ".yaml", ".json", ".xml.gz", ".yml.gz", ".yaml.gz", ".json.gz"})
-    if (EndsWith(path, ext)) return ReadFileStorageDepth(path);
+    if (HasExtension(path, ext)) return ReadFileStorageDepth(path);
   const cv::Mat raw = ReadDepthImage(path);
   cv::Mat depth_m;
   ConvertDepth(raw, DepthConvention::FromDepthScale(depth_scale), DepthConversionOptions(),
