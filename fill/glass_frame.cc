@@ -6,10 +6,10 @@
 #include <cstdio>
 #include <map>
 #include <opencv2/imgproc.hpp>
-#include <random>
 
 #include "acquisition/bounds.h"
 #include "acquisition/errors.h"
+#include "acquisition/plane_fit.h"
 #include "acquisition/stats.h"
 
 namespace gf {
@@ -33,48 +33,14 @@ Eigen::Vector3d PointAt(const cv::Mat& rays, const cv::Mat& depth_m, int x, int 
   return Eigen::Vector3d(r[0] * z, r[1] * z, z);
 }
 
-// A plane in the camera frame, its normal towards the camera.
-struct Plane {
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-  double offset = 0;  // normal . p + offset = 0, > 0
-  int inliers = 0;    // points within plane_inlier_m of it
-};
+// A plane in the camera frame, its normal towards the camera (normal . p + offset = 0, offset > 0).
+using Plane = FittedPlane;
 
 // A plane through points: the one with the most within plane_inlier_m (RANSAC, a fixed seed),
 // refined by least squares over those. False when none has 3.
 bool FitPlane(const std::vector<Eigen::Vector3d>& points, const GlassFrameOptions& o,
               Plane* plane) {
-  if (points.size() < 3) return false;
-  std::mt19937 random(12345);
-  std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
-  int best = 0;
-  Eigen::Vector3d best_n = Eigen::Vector3d::Zero();
-  double best_d = 0;
-  for (int it = 0; it < o.plane_iterations; ++it) {
-    const Eigen::Vector3d a = points[pick(random)], b = points[pick(random)],
-                          c = points[pick(random)];
-    Eigen::Vector3d n = (b - a).cross(c - a);
-    if (n.norm() < 1e-9) continue;
-    n.normalize();
-    const double d = -n.dot(a);
-    int inliers = 0;
-    for (const Eigen::Vector3d& p : points) inliers += std::abs(n.dot(p) + d) < o.plane_inlier_m;
-    if (inliers > best) best = inliers, best_n = n, best_d = d;
-  }
-  if (best < 3) return false;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  std::vector<Eigen::Vector3d> inliers;
-  for (const Eigen::Vector3d& p : points)
-    if (std::abs(best_n.dot(p) + best_d) < o.plane_inlier_m) inliers.push_back(p), mean += p;
-  mean /= static_cast<double>(inliers.size());
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (const Eigen::Vector3d& p : inliers) scatter += (p - mean) * (p - mean).transpose();
-  Eigen::Vector3d n = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvectors().col(0);
-  if (n.dot(best_n) < 0) n = -n;
-  double d = -n.dot(mean);
-  if (d < 0) n = -n, d = -d;
-  *plane = {n, d, best};
-  return true;
+  return RansacPlane(points, o.plane_inlier_m, o.plane_iterations, plane);
 }
 
 // The points of every step-th pixel with a reading inside `area` (and not in `except`, if given).
@@ -132,20 +98,8 @@ cv::Mat SupportExtent(const cv::Mat& on_plane, double pixels_per_m) {
 // plane holds at least a twentieth of all the points.
 std::vector<Plane> SupportPlanes(std::vector<Eigen::Vector3d> points, int count,
                                  const GlassFrameOptions& o) {
-  std::vector<Plane> planes;
-  const size_t all = points.size();
-  Plane plane;
-  while (static_cast<int>(planes.size()) < count && FitPlane(points, o, &plane) &&
-         plane.inliers * 20 >= static_cast<int>(all)) {
-    planes.push_back(plane);
-    points.erase(std::remove_if(points.begin(), points.end(),
-                                [&plane, &o](const Eigen::Vector3d& p) {
-                                  return std::abs(plane.normal.dot(p) + plane.offset) <
-                                         o.plane_inlier_m;
-                                }),
-                 points.end());
-  }
-  return planes;
+  const double twentieth = static_cast<double>(points.size()) / 20;
+  return RansacPlanes(std::move(points), o.plane_inlier_m, o.plane_iterations, count, twentieth);
 }
 
 // Step 2: the glass regions (255) from the holes over the supports that are not shadows.

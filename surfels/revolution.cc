@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <unordered_map>
 
 #include "acquisition/bounds.h"
+#include "acquisition/plane_fit.h"
 #include "acquisition/stats.h"
 
 namespace gf {
@@ -14,50 +16,76 @@ namespace {
 
 constexpr double kTwoPi = 2 * M_PI;
 
-// Groups the transparent surfels of `map` into objects: surfels within `gap` of one another, by
-// a breadth-first walk over cells of that size. Groups come out in the order of their first
-// surfel in the map, each in map order (deterministic).
-std::vector<std::vector<int>> GroupTransparent(const std::vector<Surfel>& map, double gap) {
-  const uint8_t transparent = static_cast<uint8_t>(DepthSource::kTransparent);
-  auto cell_of = [gap](const Eigen::Vector3f& p) {
-    return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / gap)),
-                           static_cast<int>(std::floor(p.y() / gap)),
-                           static_cast<int>(std::floor(p.z() / gap)));
-  };
-  auto key = [](const Eigen::Vector3i& c) {
-    return (static_cast<int64_t>(c.x()) * 73856093) ^ (static_cast<int64_t>(c.y()) * 19349663) ^
-           (static_cast<int64_t>(c.z()) * 83492791);
-  };
-  std::unordered_map<int64_t, std::vector<int>> cells;
-  std::vector<int> members;
-  for (size_t i = 0; i < map.size(); ++i)
-    if (map[i].source == transparent && !map[i].removed()) {
-      cells[key(cell_of(map[i].position))].push_back(static_cast<int>(i));
-      members.push_back(static_cast<int>(i));
-    }
-  std::vector<bool> seen(map.size(), false);
-  std::vector<std::vector<int>> groups;
-  const float gap2 = static_cast<float>(gap * gap);
-  for (int start : members) {
-    if (seen[start]) continue;
-    std::vector<int> group{start};
-    seen[start] = true;
-    for (size_t next = 0; next < group.size(); ++next) {
-      const Eigen::Vector3f p = map[group[next]].position;
-      const Eigen::Vector3i c = cell_of(p);
+// The surfels of a map that pass a test, in cells of `gap` metres, for walks from surfel to
+// surfel within `gap` of one another.
+class SurfelGrid {
+ public:
+  template <typename Keep>
+  SurfelGrid(const std::vector<Surfel>& map, double gap, Keep keep)
+      : map_(map), gap_(gap), gap2_(static_cast<float>(gap * gap)) {
+    for (size_t i = 0; i < map.size(); ++i)
+      if (!map[i].removed() && keep(map[i])) {
+        cells_[Key(Cell(map[i].position))].push_back(static_cast<int>(i));
+        members_.push_back(static_cast<int>(i));
+      }
+  }
+  const std::vector<int>& members() const { return members_; }  // in map order
+
+  // Extends `group` (surfels of the grid) breadth first with every surfel of the grid within gap
+  // of one of its surfels that `admit` accepts and `seen` does not hold, marking them seen.
+  template <typename Admit>
+  void Walk(std::vector<int>* group, std::vector<bool>* seen, Admit admit) const {
+    for (size_t next = 0; next < group->size(); ++next) {
+      const Eigen::Vector3f p = map_[(*group)[next]].position;
+      const Eigen::Vector3i c = Cell(p);
       for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dz = -1; dz <= 1; ++dz) {
-            const auto it = cells.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-            if (it == cells.end()) continue;
+            const auto it = cells_.find(Key(c + Eigen::Vector3i(dx, dy, dz)));
+            if (it == cells_.end()) continue;
             for (int j : it->second)
-              if (!seen[j] && (map[j].position - p).squaredNorm() <= gap2) {
-                seen[j] = true;
-                group.push_back(j);
+              if (!(*seen)[j] && (map_[j].position - p).squaredNorm() <= gap2_ && admit(j)) {
+                (*seen)[j] = true;
+                group->push_back(j);
               }
           }
     }
-    std::sort(group.begin(), group.end());
+    std::sort(group->begin(), group->end());
+  }
+
+ private:
+  Eigen::Vector3i Cell(const Eigen::Vector3f& p) const {
+    return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / gap_)),
+                           static_cast<int>(std::floor(p.y() / gap_)),
+                           static_cast<int>(std::floor(p.z() / gap_)));
+  }
+  static int64_t Key(const Eigen::Vector3i& c) {
+    return (static_cast<int64_t>(c.x()) * 73856093) ^ (static_cast<int64_t>(c.y()) * 19349663) ^
+           (static_cast<int64_t>(c.z()) * 83492791);
+  }
+  const std::vector<Surfel>& map_;
+  double gap_;
+  float gap2_;
+  std::unordered_map<int64_t, std::vector<int>> cells_;
+  std::vector<int> members_;
+};
+
+bool IsTransparent(const Surfel& s) {
+  return s.source == static_cast<uint8_t>(DepthSource::kTransparent);
+}
+
+// Groups the transparent surfels of `map` into objects: surfels within `gap` of one another.
+// Groups come out in the order of their first surfel in the map, each in map order
+// (deterministic).
+std::vector<std::vector<int>> GroupTransparent(const std::vector<Surfel>& map, double gap) {
+  const SurfelGrid grid(map, gap, IsTransparent);
+  std::vector<bool> seen(map.size(), false);
+  std::vector<std::vector<int>> groups;
+  for (int start : grid.members()) {
+    if (seen[start]) continue;
+    std::vector<int> group{start};
+    seen[start] = true;
+    grid.Walk(&group, &seen, [](int) { return true; });
     groups.push_back(std::move(group));
   }
   return groups;
@@ -187,23 +215,104 @@ void LaySurfels(const RevolutionShape& shape, const Eigen::Vector3f& u, const Ei
 // fits them best.
 double PlaneResidual(const std::vector<Surfel>& map, const std::vector<int>& group,
                      const Eigen::Vector3d& mean) {
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (int i : group) {
-    const Eigen::Vector3d d = map[i].position.cast<double>() - mean;
-    scatter += d * d.transpose();
-  }
-  const Eigen::Vector3d normal =
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvectors().col(0);
+  std::vector<Eigen::Vector3d> points;
+  for (int i : group) points.push_back(map[i].position.cast<double>());
+  const Eigen::Vector3d normal = LeastSquaresNormal(points, mean);
   std::vector<double> off;
-  for (int i : group) off.push_back(std::abs(normal.dot(map[i].position.cast<double>() - mean)));
+  for (const Eigen::Vector3d& p : points) off.push_back(std::abs(normal.dot(p - mean)));
   return Median(off);
 }
 
-// One object: its shape and surfels when it is a surface of revolution.
+// The plane an object stands on (world frame): normal . x + offset is the height above it, the
+// normal pointing up to the object.
+struct Support {
+  bool found = false;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double offset = 0;
+  double Height(const Eigen::Vector3f& p) const { return normal.dot(p.cast<double>()) + offset; }
+};
+
+// RANSAC draws per support plane, and the most surfels near an object it looks at (every k-th):
+// a plane that holds a third of them is drawn with 99.9% certainty (1 - (1 - 1/27)^200); one that
+// holds only min_support_share may be missed. The RANSAC's cost does not grow with the map.
+constexpr int kSupportIterations = 200;
+constexpr size_t kMaxSupportPoints = 4000;
+constexpr int kSupportPlanes = 3;
+
+Eigen::Vector3d Centre(const std::vector<Surfel>& map, const std::vector<int>& group) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (int i : group) c += map[i].position.cast<double>();
+  return c / static_cast<double>(group.size());
+}
+
+// The largest planes of the opaque surfels near the group that it may stand on: it lies above
+// each (its lowest surfel no more than support_inlier_m under it), its normals a median of at
+// least min_support_angle_deg from the plane's (a glass's side is upright on its table; a pane's
+// normals are its wall's). The one its normals are most nearly perpendicular to first.
+std::vector<Support> CandidateSupports(const std::vector<Surfel>& map,
+                                       const std::vector<int>& group,
+                                       const std::vector<Eigen::Vector3d>& opaque,
+                                       const RevolutionOptions& o) {
+  const Eigen::Vector3d centre = Centre(map, group);
+  const double reach2 = o.support_radius_m * o.support_radius_m;
+  std::vector<Eigen::Vector3d> near;
+  for (const Eigen::Vector3d& p : opaque)
+    if ((p - centre).squaredNorm() <= reach2) near.push_back(p);
+  const size_t stride = near.size() / kMaxSupportPoints + 1;
+  std::vector<Eigen::Vector3d> points;
+  for (size_t i = 0; i < near.size(); i += stride) points.push_back(near[i]);
+  const double min_inliers =
+      std::max(3.0, o.min_support_share * static_cast<double>(points.size()));
+  const double max_cos = std::cos(o.min_support_angle_deg * M_PI / 180.0);
+  std::vector<std::pair<double, Support>> found;  // (median cosine, plane)
+  for (const FittedPlane& plane : RansacPlanes(std::move(points), o.support_inlier_m,
+                                               kSupportIterations, kSupportPlanes, min_inliers)) {
+    Support s{true, plane.normal, plane.offset};
+    if (s.normal.dot(centre) + s.offset < 0) s.normal = -s.normal, s.offset = -s.offset;
+    double lowest = 1e30;
+    std::vector<double> cosines;
+    for (int i : group) {
+      lowest = std::min(lowest, s.Height(map[i].position));
+      cosines.push_back(std::abs(s.normal.dot(map[i].normal.cast<double>())));
+    }
+    const double cosine = Median(std::move(cosines));
+    if (lowest >= -o.support_inlier_m && cosine <= max_cos) found.emplace_back(cosine, s);
+  }
+  std::stable_sort(found.begin(), found.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<Support> supports;
+  for (const auto& f : found) supports.push_back(f.second);
+  return supports;
+}
+
+// The surfels of any source on the surface of a standing object: reached from its transparent
+// surfels over gaps of at most cluster_gap_m, above its support (more than twice
+// support_inlier_m: not the table), their footprint within max_radius_m of its transparent
+// surfels' centre. The sensor's readings of the glass that stayed opaque, and a bottle's label,
+// lie on the same surface as the few transparent surfels.
+std::vector<int> WholeSurface(const std::vector<Surfel>& map, const SurfelGrid& all,
+                              const std::vector<int>& group, const Support& support,
+                              const RevolutionOptions& o, std::vector<bool>* seen) {
+  Eigen::Vector3d centre = Centre(map, group);
+  centre -= (support.normal.dot(centre) + support.offset) * support.normal;
+  const double reach2 = o.max_radius_m * o.max_radius_m;
+  std::vector<int> surface = group;
+  for (int i : group) (*seen)[i] = true;
+  all.Walk(&surface, seen, [&](int j) {
+    const Eigen::Vector3d p = map[j].position.cast<double>();
+    const double h = support.normal.dot(p) + support.offset;
+    return h > 2 * o.support_inlier_m && (p - h * support.normal - centre).squaredNorm() <= reach2;
+  });
+  return surface;
+}
+
+// Standing on a support, its axis is the support's normal and it reaches down to the support.
+// `group`: the surfels fitted; `glass`: its transparent ones, whose look the laid surfels take.
 bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
-               const RevolutionOptions& o, RevolutionShape* shape, std::vector<Surfel>* out) {
-  Eigen::Vector3f axis;
-  if (!AxisOfNormals(map, group, o.max_axis_spread, &axis)) return false;
+               const std::vector<int>& glass, const Support& support, const RevolutionOptions& o,
+               RevolutionShape* shape, std::vector<Surfel>* out) {
+  Eigen::Vector3f axis = support.normal.cast<float>();
+  if (!support.found && !AxisOfNormals(map, group, o.max_axis_spread, &axis)) return false;
   const Eigen::Vector3f any =
       std::abs(axis.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
   const Eigen::Vector3f u = axis.cross(any).normalized(), w = axis.cross(u);
@@ -215,13 +324,15 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
     low = std::min(low, h), high = std::max(high, h);
   }
   mean /= group.size();
+  if (support.found) low = -support.offset;  // axis . x on the support
   const Eigen::Vector3f origin = mean.cast<float>();
   const double origin_h = axis.dot(origin);
   std::vector<AxisPoint> points;
   for (int i : group) {
     const Eigen::Vector3f d = map[i].position - origin;
-    points.push_back({u.dot(d), w.dot(d), axis.dot(map[i].position) - low, u.dot(map[i].normal),
-                      w.dot(map[i].normal)});
+    // A standing object's surfels may lie up to support_inlier_m under its support: at its foot.
+    const double h = std::max(0.0, axis.dot(map[i].position) - low);
+    points.push_back({u.dot(d), w.dot(d), h, u.dot(map[i].normal), w.dot(map[i].normal)});
   }
   const int steps = std::max(1, static_cast<int>(std::ceil((high - low) / o.height_step_m)));
   Eigen::Vector2d centre;
@@ -236,19 +347,20 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
       shape->arc_deg < o.min_arc_deg)
     return false;
   shape->axis = axis;
+  shape->standing = support.found;
   shape->base = origin + static_cast<float>(centre.x()) * u + static_cast<float>(centre.y()) * w +
                 static_cast<float>(low - origin_h) * axis;
   shape->height_m = static_cast<float>(high - low);
   shape->radius_m.assign(radius.begin(), radius.end());
   shape->surfels = static_cast<int>(group.size());
-  // The laid surfels take the object's median confidence and its mean colour.
+  // The laid surfels take the glass's median confidence and its mean colour.
   std::vector<float> confidence;
   Eigen::Vector3d colour = Eigen::Vector3d::Zero();
-  for (int i : group) {
+  for (int i : glass) {
     confidence.push_back(map[i].confidence);
     colour += Eigen::Vector3d(map[i].red, map[i].green, map[i].blue);
   }
-  colour /= group.size();
+  colour /= glass.size();
   Surfel like;
   like.confidence = Median(std::move(confidence));
   like.radius = static_cast<float>(0.75 * o.spacing_m);
@@ -256,7 +368,7 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
   like.green = static_cast<uint8_t>(colour.y() + 0.5);
   like.blue = static_cast<uint8_t>(colour.z() + 0.5);
   like.source = static_cast<uint8_t>(DepthSource::kTransparent);
-  like.last_frame = map[group.back()].last_frame;
+  like.last_frame = map[glass.back()].last_frame;
   LaySurfels(*shape, u, w, like, o.height_step_m, o.spacing_m, out);
   return true;
 }
@@ -276,19 +388,62 @@ bool RevolutionOptions::Check(std::string* message) const {
       .In("max_residual_share", max_residual_share, 0, 1, kMoreThanOne)
       .In("min_arc_deg", min_arc_deg, 0, 360, "is more than a full turn")
       .Above("height_step_m", height_step_m, 0, kMaxSceneM, kLargerThanAnyScene)
-      .Above("spacing_m", spacing_m, 1e-4, kMaxSceneM, kLargerThanAnyScene);
+      .Above("spacing_m", spacing_m, 1e-4, kMaxSceneM, kLargerThanAnyScene)
+      .Above("support_radius_m", support_radius_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .Above("support_inlier_m", support_inlier_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .In("min_support_share", min_support_share, 0, 1, kMoreThanOne)
+      .In("min_support_angle_deg", min_support_angle_deg, 0, 90, "is more than a right angle")
+      .In("max_base_gap_m", max_base_gap_m, 0, kMaxSceneM, kLargerThanAnyScene);
   return c.ok();
 }
 
 RevolutionResult FitRevolutions(const std::vector<Surfel>& map, const RevolutionOptions& options) {
   RevolutionResult result;
   if (!options.enabled) return result;
-  for (const std::vector<int>& group : GroupTransparent(map, options.cluster_gap_m)) {
-    if (static_cast<int>(group.size()) < options.min_surfels) continue;
-    ++result.objects;
-    RevolutionShape shape;
-    if (FitObject(map, group, options, &shape, &result.surfels))
-      result.shapes.push_back(std::move(shape));
+  const std::vector<std::vector<int>> groups = GroupTransparent(map, options.cluster_gap_m);
+  std::vector<Eigen::Vector3d> opaque;
+  std::unique_ptr<SurfelGrid> all;
+  if (options.stand_on_support) {
+    for (const Surfel& s : map)
+      if (!IsTransparent(s) && !s.removed()) opaque.push_back(s.position.cast<double>());
+    if (options.fit_whole_surface)
+      all = std::make_unique<SurfelGrid>(map, options.cluster_gap_m,
+                                         [](const Surfel&) { return true; });
+  }
+  std::vector<bool> seen(map.size(), false);  // on the surface of an object completed before
+  for (const std::vector<int>& whole_group : groups) {
+    // The group's surfels that no object completed before took in.
+    std::vector<int> group;
+    for (int i : whole_group)
+      if (!seen[i]) group.push_back(i);
+    if (group.empty()) continue;
+    Support support;
+    std::vector<int> fitted = group;
+    // A group of one or two surfels (an outline's flicker) seeds no object on its own.
+    if (options.stand_on_support && group.size() >= 3)
+      for (const Support& s : CandidateSupports(map, group, opaque, options)) {
+        // It stands on the plane when its surface reaches down to it.
+        std::vector<int> surface = all ? WholeSurface(map, *all, group, s, options, &seen) : group;
+        double lowest = 1e30;
+        for (int i : surface) lowest = std::min(lowest, s.Height(map[i].position));
+        if (lowest <= options.max_base_gap_m) {
+          support = s, fitted = std::move(surface);
+          break;
+        }
+        for (int i : surface) seen[i] = false;  // not this object's surface: free it again
+      }
+    std::vector<int> glass;
+    for (int i : fitted)
+      if (IsTransparent(map[i])) glass.push_back(i);
+    bool shaped = false;
+    if (static_cast<int>(glass.size()) >= options.min_surfels) {
+      ++result.objects;
+      RevolutionShape shape;
+      shaped = FitObject(map, fitted, glass, support, options, &shape, &result.surfels);
+      if (shaped) result.shapes.push_back(std::move(shape));
+    }
+    // An object with a shape keeps its surface; a refused one leaves it to the groups after it.
+    for (int i : fitted) seen[i] = shaped;
   }
   return result;
 }

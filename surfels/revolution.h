@@ -7,12 +7,15 @@
 // lie on gives them (Phillips et al., "Seeing Glassware: from Edge Detection to Pose Estimation
 // and Shape Recovery", RSS 2016, recover glassware as surfaces of revolution from one view).
 //
-// The axis is the direction the surfels' normals are all perpendicular to (the normals of a
-// surface of revolution meet its axis); the centre and the radius per height come from one
-// linear circle fit (Kasa's) with a shared centre and a radius per height step. An object is
-// completed only when its surfels lie within max_residual_m of the fitted surface and span
-// min_arc_deg around the axis: a pane (normals all alike), a sphere (normals everywhere) or a few
-// surfels on an outline give no axis or no circle and are left as they are.
+// An object standing upright on a plane of the map (a table, a shelf board) takes the plane's
+// normal as its axis and is fitted to its whole surface in the map (the glass the sensor read as
+// opaque, a label), from the plane up. Otherwise the axis is the direction the surfels' normals
+// are all perpendicular to (the normals of a surface of revolution meet its axis); the centre and
+// the radius per height come from one linear circle fit (Kasa's) with a shared centre and a radius
+// per height step. An object is completed only when its surfels lie within max_residual_m of the
+// fitted surface and span min_arc_deg around the axis: a pane (normals all alike), a sphere
+// (normals everywhere) or a few surfels on an outline give no axis or no circle and are left as
+// they are.
 //
 // No threads, no I/O. Usage:
 //   gf::RevolutionResult r = gf::FitRevolutions(fusion.StableSurfels(), options);
@@ -30,9 +33,9 @@ namespace gf {
 struct RevolutionOptions {
   bool enabled = true;
   double cluster_gap_m = 0.02;  // transparent surfels this close (metres) belong to one object
-  // An object with fewer transparent surfels gets no shape (the fit has two unknowns for the
-  // centre and one per height step).
-  int min_surfels = 20;
+  // An object with fewer transparent surfels gets no shape (evidence that it is clear glass; and
+  // a fit to transparent surfels alone has two unknowns for the centre and one per height step).
+  int min_surfels = 10;
   // The smallest eigenvalue of the normals' scatter over the middle one, at most: the normals lie
   // near a plane, the one perpendicular to the axis (a cylinder's give the noise of its normals;
   // a sphere's, the same in every direction, about 1).
@@ -55,6 +58,29 @@ struct RevolutionOptions {
   double min_arc_deg = 60;
   double height_step_m = 0.01;  // the radius is fitted per step of this height, metres
   double spacing_m = 0.005;     // between the surfels laid on the completed surface, metres
+  // Objects stand on a support (Phillips et al.: glassware upright on a table): the largest
+  // planes of the map's other surfels within support_radius_m (metres) of an object, each
+  // holding min_support_share of those surfels or more (within support_inlier_m, metres), are
+  // its candidates: the object lies above it, its normals a median of min_support_angle_deg or
+  // more from the plane's (a glass's side is upright; a pane's normals are its wall's). It stands
+  // on the first, most nearly perpendicular to its normals, that its surface reaches down to
+  // (its lowest surfel at most max_base_gap_m, metres, up: the sensor rarely reads a glass's
+  // foot, and may read a bottle's glass only above its label). A standing object's axis is the
+  // support's normal and its surface reaches down to the support. Off (or no support found): the
+  // axis from the normals alone, the surface between the lowest and highest transparent surfel.
+  bool stand_on_support = true;
+  // A standing object is fitted to every surfel of the map on its surface (any source: the
+  // sensor's readings of the glass that stayed opaque, a bottle's label), reached from its
+  // transparent surfels over gaps of cluster_gap_m, above its support, within max_radius_m of
+  // their centre across the axis; min_surfels counts the transparent ones among them. A surfel
+  // belongs to one completed object at most (a refused object's surface is left to the groups
+  // after it). Off: its transparent surfels alone.
+  bool fit_whole_surface = true;
+  double support_radius_m = 0.3;
+  double support_inlier_m = 0.01;
+  double min_support_share = 0.1;
+  double min_support_angle_deg = 60;
+  double max_base_gap_m = 0.1;
   // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
   // names the field.
   bool Check(std::string* message = nullptr) const;
@@ -63,18 +89,22 @@ struct RevolutionOptions {
 // One object completed as a surface of revolution (world frame).
 struct RevolutionShape {
   Eigen::Vector3f axis = Eigen::Vector3f::UnitZ();  // unit
-  Eigen::Vector3f base = Eigen::Vector3f::Zero();   // the axis at the lowest surfel's height
-  float height_m = 0;                               // from base along the axis
-  std::vector<float> radius_m;                      // per height_step_m from base, metres
-  int surfels = 0;                                  // transparent surfels it was fitted to
-  float residual_m = 0;                             // their median distance from the surface
-  float normal_deg = 0;        // their normals' median angle from the surface's
-  float plane_residual_m = 0;  // their median distance from the plane that fits them best
-  float arc_deg = 0;           // how far round the axis they reach
+  // The axis on the support (standing), or at the lowest surfel's height.
+  Eigen::Vector3f base = Eigen::Vector3f::Zero();
+  float height_m = 0;           // from base along the axis
+  std::vector<float> radius_m;  // per height_step_m from base, metres
+  int surfels = 0;              // surfels it was fitted to (the whole surface, when standing)
+  float residual_m = 0;         // their median distance from the surface
+  float normal_deg = 0;         // their normals' median angle from the surface's
+  float plane_residual_m = 0;   // their median distance from the plane that fits them best
+  float arc_deg = 0;            // how far round the axis they reach
+  bool standing = false;        // on a support: base on it, axis its normal
 };
 
 struct RevolutionResult {
-  int objects = 0;                      // groups of transparent surfels with min_surfels or more
+  // Objects tried: surfaces holding min_surfels transparent surfels or more (a refused one may be
+  // tried again from another of its groups).
+  int objects = 0;
   std::vector<RevolutionShape> shapes;  // the accepted ones
   std::vector<Surfel> surfels;          // laid on them: source kTransparent
 };

@@ -108,12 +108,111 @@ TEST(Revolution, LeavesPanesSpheresAndScrapsAlone) {
       const Eigen::Vector3f n(0.12f * i, 0.12f * j, -1.f);
       map.push_back(At(Eigen::Vector3f(0.5f, 0, 1.2f) + 0.07f * n.normalized(), n));
     }
-  // A few transparent surfels on an outline.
-  for (int i = 0; i < 10; ++i) map.push_back(At({-0.5f, 0.01f * i, 1.0f}, {1, 0, -1}));
+  // A few transparent surfels on an outline (fewer than min_surfels).
+  for (int i = 0; i < 6; ++i) map.push_back(At({-0.5f, 0.01f * i, 1.0f}, {1, 0, -1}));
   const RevolutionResult r = FitRevolutions(map, {});
   EXPECT_EQ(r.objects, 2);
   EXPECT_TRUE(r.shapes.empty());
   EXPECT_TRUE(r.surfels.empty());
+}
+
+// Opaque surfels every 1 cm on a square of `half` metres round `centre` in the plane spanned by
+// u and w (a table, a shelf board, a wall), normal u x w.
+std::vector<Surfel> Board(const Eigen::Vector3f& centre, const Eigen::Vector3f& u,
+                          const Eigen::Vector3f& w, float half) {
+  std::vector<Surfel> out;
+  const uint8_t sensor = static_cast<uint8_t>(DepthSource::kSensor);
+  for (float a = -half; a <= half; a += 0.01f)
+    for (float b = -half; b <= half; b += 0.01f)
+      out.push_back(At(centre + a * u + b * w, u.cross(w), sensor));
+  return out;
+}
+
+// A glass on a table seen over its middle only (the sensor missed its foot and its rim), the
+// table tilted and a wall 6 cm behind the glass: the glass stands on the table, its axis the
+// table's normal, its surface laid down to the table.
+TEST(Revolution, StandsAGlassOnItsTable) {
+  const Eigen::Vector3f up = Eigen::Vector3f(0.05f, -1.f, 0.1f).normalized();
+  const Eigen::Vector3f across = up.unitOrthogonal(), depth = up.cross(across);
+  const Eigen::Vector3f foot(0.1f, 0.4f, 1.3f);
+  auto radius = [](double) { return 0.035; };
+  std::vector<Surfel> map = FrontOf(Eigen::Vector3f(foot + 0.05f * up), up, 0.08, 100, radius, 3);
+  for (Surfel& s : map) {  // the front faces the camera (-depth): turn the arc towards it
+    const Eigen::Vector3f d = s.position - foot;
+    s.position = foot + d.dot(up) * up +
+                 Eigen::AngleAxisf(static_cast<float>(M_PI) / 2, up) * (d - d.dot(up) * up);
+    s.normal = Eigen::AngleAxisf(static_cast<float>(M_PI) / 2, up) * s.normal;
+  }
+  const std::vector<Surfel> table = Board(foot, across, depth, 0.25f);
+  const std::vector<Surfel> wall = Board(foot + 0.1f * depth + 0.15f * up, across, up, 0.2f);
+  map.insert(map.end(), table.begin(), table.end());
+  map.insert(map.end(), wall.begin(), wall.end());
+  const RevolutionResult r = FitRevolutions(map, {});
+  ASSERT_EQ(r.shapes.size(), 1u);
+  const RevolutionShape& shape = r.shapes[0];
+  EXPECT_TRUE(shape.standing);
+  EXPECT_GT(shape.axis.dot(up), std::cos(1 * M_PI / 180));
+  EXPECT_NEAR(shape.height_m, 0.13, 0.01);
+  EXPECT_LT((shape.base - foot).norm(), 0.005);
+  float lowest = 1;
+  for (const Surfel& s : r.surfels) {
+    EXPECT_LT(OffSurface(s.position, foot, up, radius), 0.005);
+    lowest = std::min(lowest, (s.position - foot).dot(up));
+  }
+  EXPECT_LT(lowest, 0.005);
+  // Off: the axis from the normals, the surface only where the glass was read.
+  RevolutionOptions off;
+  off.stand_on_support = false;
+  const RevolutionResult r2 = FitRevolutions(map, off);
+  ASSERT_EQ(r2.shapes.size(), 1u);
+  EXPECT_FALSE(r2.shapes[0].standing);
+  EXPECT_NEAR(r2.shapes[0].height_m, 0.08, 0.01);
+}
+
+// A bottle whose label (opaque, 10 cm) the sensor reads, its glass seen through only above the
+// label (14 cm up) and read as an opaque surface below it: the bottle is one object standing on
+// the table, fitted to its glass and its label. A second glass 4 cm away stays apart, and so does
+// a glass on the board above.
+TEST(Revolution, FitsABottleWithItsLabel) {
+  const Eigen::Vector3f up(0, -1, 0), foot(0, 0.4f, 1.3f);
+  auto radius = [](double) { return 0.03; };
+  std::vector<Surfel> map;
+  for (double h0 : {0.02, 0.14}) {  // the glass below and above the label, a narrow strip
+    std::vector<Surfel> glass =
+        FrontOf(Eigen::Vector3f(foot + static_cast<float>(h0) * up), up, 0.015, 40, radius, 4);
+    if (h0 < 0.1)
+      for (Surfel& s : glass) s.source = static_cast<uint8_t>(DepthSource::kSensor);
+    map.insert(map.end(), glass.begin(), glass.end());
+  }
+  std::vector<Surfel> label = FrontOf(Eigen::Vector3f(foot + 0.035f * up), up, 0.1, 120, radius, 5);
+  for (Surfel& s : label) s.source = static_cast<uint8_t>(DepthSource::kSensor);
+  map.insert(map.end(), label.begin(), label.end());
+  const Eigen::Vector3f other(0.1f, 0.4f, 1.3f);  // a second glass, 4 cm from the first
+  const std::vector<Surfel> glass2 = FrontOf(other, up, 0.1, 120, radius, 6);
+  map.insert(map.end(), glass2.begin(), glass2.end());
+  const Eigen::Vector3f above(0, 0.1f, 1.3f);  // on a board 30 cm up, over the bottle
+  const std::vector<Surfel> glass3 = FrontOf(above, up, 0.1, 120, radius, 7);
+  map.insert(map.end(), glass3.begin(), glass3.end());
+  for (const Eigen::Vector3f& board : {foot, above}) {
+    const std::vector<Surfel> b = Board(board + Eigen::Vector3f(0, 0, 0.05f),
+                                        Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(1, 0, 0), 0.2f);
+    map.insert(map.end(), b.begin(), b.end());
+  }
+  const RevolutionResult r = FitRevolutions(map, {});
+  EXPECT_EQ(r.objects, 3);
+  ASSERT_EQ(r.shapes.size(), 3u);
+  int bottles = 0;
+  for (const RevolutionShape& shape : r.shapes) {
+    EXPECT_TRUE(shape.standing);
+    EXPECT_GT(shape.axis.dot(up), 0.999f);
+    for (float rr : shape.radius_m) EXPECT_NEAR(rr, 0.03, 0.004);
+    bottles += std::abs(shape.height_m - 0.155f) < 0.01f;
+  }
+  EXPECT_EQ(bottles, 1);  // from the table to the top of the upper glass
+  // Its transparent surfels alone (a narrow strip high above the table): no shape for the bottle.
+  RevolutionOptions alone;
+  alone.fit_whole_surface = false;
+  EXPECT_EQ(FitRevolutions(map, alone).shapes.size(), 2u);
 }
 
 TEST(Revolution, OptionsAreChecked) {
