@@ -123,7 +123,7 @@ void FusionStage::CloseFills() {
   fills_changed_.notify_all();
 }
 
-void FusionStage::Finish(const std::function<bool()>& poll) {
+void FusionStage::Finish(const std::function<bool()>& poll, const OutlineViews& views) {
   queue_.Close();
   while (!worker_.WaitFor(std::chrono::milliseconds(50)))
     if (poll && poll()) Cancel();
@@ -132,7 +132,7 @@ void FusionStage::Finish(const std::function<bool()>& poll) {
   for (Map& m : maps_) {
     const GlassOptions& glass = options_.fusion.glass;
     if (glass.enabled && glass.revolution.enabled) {
-      m.revolutions = FitRevolutions(m.fusion.StableSurfels(), glass.revolution);
+      m.revolutions = FitRevolutions(m.fusion.StableSurfels(), glass.revolution, &camera_, views);
       m.fusion.AddSurfels(m.revolutions.surfels);
     }
     Record(&m);
@@ -351,6 +351,8 @@ SurfelReport FusionStage::Report(size_t index) const {
   r.corrections_applied = corrections_applied_;
   r.glass_objects = m.revolutions.objects;
   r.glass_shapes = static_cast<int>(m.revolutions.shapes.size());
+  for (const RevolutionShape& shape : m.revolutions.shapes)
+    r.glass_shapes_from_outlines += shape.from_outline;
   r.glass_shape_surfels = static_cast<long>(m.revolutions.surfels.size());
   return r;
 }

@@ -134,9 +134,11 @@ class FusionStage {
   void FillsProcessed(int n);
   // The fill stage has ended (no more fills): frames stop waiting for it.
   void CloseFills();
-  // Fuses what is queued, joins the worker, writes the maps. Rethrows a map that could not be
-  // written. `poll` (may be empty) is called every 50 ms while it waits; true cancels the rest.
-  void Finish(const std::function<bool()>& poll = {});
+  // Fuses what is queued, joins the worker, completes clear objects (surfels/revolution.h; `views`,
+  // may be empty: colour views for their outlines, at the final corrections), writes the maps.
+  // Rethrows a map that could not be written. `poll` (may be empty) is called every 50 ms while it
+  // waits; true cancels the rest.
+  void Finish(const std::function<bool()>& poll = {}, const OutlineViews& views = {});
   void Cancel();
   int frames_fused() const { return frames_fused_; }
   // The model's depth at the pose of the frames_fused()-th frame, once at least `frames` frames

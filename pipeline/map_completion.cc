@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <map>
+#include <memory>
 #include <thread>
 
 namespace gf {
@@ -37,16 +38,42 @@ KeyframeCompletion CompleteOne(const KeyframeFill& k, const std::map<std::string
   return out;
 }
 
+// Frame name -> pose, trajectory entry i being frame names[i].
+std::map<std::string, SE3> PosesByName(const Trajectory& trajectory,
+                                       const std::vector<std::string>& names) {
+  std::map<std::string, SE3> poses;
+  for (size_t i = 0; i < trajectory.size() && i < names.size(); ++i)
+    poses[names[i]] = trajectory[i].world_from_camera;
+  return poses;
+}
+
 }  // namespace
+
+OutlineViews KeyframeViews(const FillStage& fill, const Trajectory& trajectory,
+                           const std::vector<std::string>& names, const RunSink& sink, int count) {
+  const std::map<std::string, SE3> poses = PosesByName(trajectory, names);
+  std::vector<std::pair<std::string, SE3>> written;
+  for (const KeyframeFill& k : fill.keyframes()) {
+    const auto pose = poses.find(k.timestamp);
+    if (k.failure.empty() && pose != poses.end()) written.emplace_back(k.timestamp, pose->second);
+  }
+  auto chosen = std::make_shared<std::vector<std::pair<std::string, SE3>>>();
+  const size_t n = std::min(written.size(), static_cast<size_t>(std::max(0, count)));
+  for (size_t i = 0; i < n; ++i) chosen->push_back(written[i * written.size() / n]);
+  return [chosen, &sink](size_t index, OutlineView* view) {
+    if (index >= chosen->size()) return false;
+    view->image = sink.KeyframeColor((*chosen)[index].first);
+    view->world_from_camera = (*chosen)[index].second;
+    return true;
+  };
+}
 
 ModelCompletionReport CompleteFromMap(const FillStage& fill, FusionStage* fusion,
                                       const Trajectory& trajectory,
                                       const std::vector<std::string>& names, RunSink* sink,
                                       const std::function<bool()>& stop,
                                       std::vector<std::string>* warnings) {
-  std::map<std::string, SE3> poses;  // by frame name (trajectory entry i is frame names[i])
-  for (size_t i = 0; i < trajectory.size() && i < names.size(); ++i)
-    poses[names[i]] = trajectory[i].world_from_camera;
+  const std::map<std::string, SE3> poses = PosesByName(trajectory, names);
   const auto start = Clock::now();
   const std::vector<KeyframeFill> keyframes_filled = fill.keyframes();
   std::vector<std::string> to_complete;

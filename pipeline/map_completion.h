@@ -27,4 +27,10 @@ ModelCompletionReport CompleteFromMap(const FillStage& fill, FusionStage* fusion
                                       const std::function<bool()>& stop,
                                       std::vector<std::string>* warnings);
 
+// The colour images of up to `count` of the filled keyframes, evenly spaced over the run, at
+// their poses in `trajectory` (names as above), read from `sink` one at a time when asked for
+// (FusionStage::Finish's views for the clear objects' outlines). `sink` must outlive the views.
+OutlineViews KeyframeViews(const FillStage& fill, const Trajectory& trajectory,
+                           const std::vector<std::string>& names, const RunSink& sink, int count);
+
 }  // namespace gf

@@ -406,7 +406,17 @@ ReconstructionSummary Reconstruction::Run(FrameSource& source, RunSink* sink,
   };
   if (s->fill) finish("fill", [&] { s->fill->Finish(poll); });
   if (s->loop) finish("loop closure", [&] { s->loop->Finish(poll); });
-  if (s->fusion) finish("fusion", [&] { s->fusion->Finish(poll); });
+  if (s->fusion)
+    finish("fusion", [&] {
+      // Colour views of the run for the clear objects' outlines (none without the fill's
+      // keyframes), at the final corrections: loop closure has finished.
+      OutlineViews views;
+      if (s->fill)
+        views = KeyframeViews(*s->fill, CorrectedTrajectory(s->tracker->record(), s->corrections),
+                              s->tracker->record().names, *sink,
+                              options_.fusion_options.fusion.glass.revolution.outline_views);
+      s->fusion->Finish(poll, views);
+    });
   if (!error && stop_reason.empty() && s->tracker->record().frames == 0)
     error = std::make_exception_ptr(InputError(source.Input(), "no frames in the selected range"));
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();

@@ -161,6 +161,10 @@ void FolderRunSink::PrepareCompletion(const std::vector<std::string>& names) {
       File(RunLayout::Keyframe(name, image));
 }
 
+cv::Mat FolderRunSink::KeyframeColor(const std::string& name) const {
+  return cv::imread(RunLayout(out_dir_).Path(name, KeyframeImage::kColor), cv::IMREAD_COLOR);
+}
+
 int FolderRunSink::CompleteKeyframe(const std::string& name, const MapCompletion& offer) {
   std::string pinhole_file;
   {
@@ -258,6 +262,13 @@ void InMemoryRunSink::WriteKeyframe(const std::string& name, const RgbdFrame& fr
                                     const CarriedFillResult& fill) {
   std::lock_guard<std::mutex> lock(mutex_);
   keyframes[name] = {frame, fill, cv::Mat(), cv::Mat()};
+}
+
+cv::Mat InMemoryRunSink::KeyframeColor(const std::string& name) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto found = keyframes.find(name);
+  if (found == keyframes.end() || found->second.frame.color.type() != CV_8UC3) return {};
+  return found->second.frame.color;
 }
 
 int InMemoryRunSink::CompleteKeyframe(const std::string& name, const MapCompletion& offer) {

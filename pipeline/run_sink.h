@@ -78,6 +78,12 @@ class RunSink {
   // them all (in the order the outputs should list them).
   virtual int CompleteKeyframe(const std::string& name, const MapCompletion& offer) = 0;
   virtual void PrepareCompletion(const std::vector<std::string>& names) { (void)names; }
+  // The colour image (CV_8UC3) of keyframe `name` as written, or an empty image where there is
+  // none (no colour, not written, or this sink keeps no images).
+  virtual cv::Mat KeyframeColor(const std::string& name) const {
+    (void)name;
+    return {};
+  }
   // Where the outputs go, for messages ("memory" for the in-memory sink).
   virtual std::string Where() const = 0;
 };
@@ -110,6 +116,7 @@ class FolderRunSink : public RunSink {
   // Claims the files the completion may add, in this order (the run folder's list of its files
   // then comes out the same on every run, whichever thread writes first).
   void PrepareCompletion(const std::vector<std::string>& names) override;
+  cv::Mat KeyframeColor(const std::string& name) const override;
   std::string Where() const override { return out_dir_; }
 
  private:
@@ -145,6 +152,7 @@ class InMemoryRunSink : public RunSink {
   void WriteReport(const RunReport& report) override;
   void WriteMap(const std::vector<Surfel>& surfels) override;
   int CompleteKeyframe(const std::string& name, const MapCompletion& offer) override;
+  cv::Mat KeyframeColor(const std::string& name) const override;
   std::string Where() const override { return "memory"; }
 
   // Read after the run.
@@ -156,7 +164,7 @@ class InMemoryRunSink : public RunSink {
   bool map_written = false;
 
  private:
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
 };
 
 // Sets *filled_depth (CV_32F metres) to offer.depth (same size, 0 = none) on the pixels of

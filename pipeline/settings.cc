@@ -74,7 +74,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(RevolutionOptions, enabled, cluster_gap_m, mi
                                    max_normal_angle_deg, max_residual_share, min_arc_deg,
                                    height_step_m, spacing_m, stand_on_support, fit_whole_surface, support_radius_m,
                                    support_inlier_m, min_support_share, min_support_angle_deg,
-                                   max_base_gap_m)
+                                   max_base_gap_m, fit_outline, outline_views, min_edge_ratio)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(GlassOptions, enabled, min_readings_on, min_through_share,
                                    edge_margin_px, stable_confidence, revolution)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FusionOptions, min_depth_m, max_depth_m, pixel_step,

@@ -176,6 +176,7 @@ void to_json(json& j, const SurfelReport& s) {
        {"corrections_applied", s.corrections_applied},
        {"glass_objects", s.glass_objects},
        {"glass_shapes", s.glass_shapes},
+       {"glass_shapes_from_outlines", s.glass_shapes_from_outlines},
        {"glass_shape_surfels", s.glass_shape_surfels}};
 }
 
@@ -306,6 +307,7 @@ void from_json(const json& j, SurfelReport& s) {
   Read(j, "corrections_applied", &s.corrections_applied);
   Read(j, "glass_objects", &s.glass_objects);
   Read(j, "glass_shapes", &s.glass_shapes);
+  Read(j, "glass_shapes_from_outlines", &s.glass_shapes_from_outlines);
   Read(j, "glass_shape_surfels", &s.glass_shape_surfels);
 }
 

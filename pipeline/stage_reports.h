@@ -97,6 +97,7 @@ struct SurfelReport {
   // Clear objects at the end of the run (glass.revolution): groups of transparent surfels big
   // enough for a shape, those completed as surfaces of revolution, the surfels laid on them.
   int glass_objects = 0, glass_shapes = 0;
+  int glass_shapes_from_outlines = 0;  // of them, those whose radius their outline gave
   long glass_shape_surfels = 0;
   long StableFrom(const std::string& source) const;  // by_source's count (0 when not there)
 };

@@ -5,70 +5,16 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
-#include <unordered_map>
 
 #include "acquisition/bounds.h"
 #include "acquisition/plane_fit.h"
 #include "acquisition/stats.h"
+#include "surfels/surfel_grid.h"
 
 namespace gf {
 namespace {
 
 constexpr double kTwoPi = 2 * M_PI;
-
-// The surfels of a map that pass a test, in cells of `gap` metres, for walks from surfel to
-// surfel within `gap` of one another.
-class SurfelGrid {
- public:
-  template <typename Keep>
-  SurfelGrid(const std::vector<Surfel>& map, double gap, Keep keep)
-      : map_(map), gap_(gap), gap2_(static_cast<float>(gap * gap)) {
-    for (size_t i = 0; i < map.size(); ++i)
-      if (!map[i].removed() && keep(map[i])) {
-        cells_[Key(Cell(map[i].position))].push_back(static_cast<int>(i));
-        members_.push_back(static_cast<int>(i));
-      }
-  }
-  const std::vector<int>& members() const { return members_; }  // in map order
-
-  // Extends `group` (surfels of the grid) breadth first with every surfel of the grid within gap
-  // of one of its surfels that `admit` accepts and `seen` does not hold, marking them seen.
-  template <typename Admit>
-  void Walk(std::vector<int>* group, std::vector<bool>* seen, Admit admit) const {
-    for (size_t next = 0; next < group->size(); ++next) {
-      const Eigen::Vector3f p = map_[(*group)[next]].position;
-      const Eigen::Vector3i c = Cell(p);
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            const auto it = cells_.find(Key(c + Eigen::Vector3i(dx, dy, dz)));
-            if (it == cells_.end()) continue;
-            for (int j : it->second)
-              if (!(*seen)[j] && (map_[j].position - p).squaredNorm() <= gap2_ && admit(j)) {
-                (*seen)[j] = true;
-                group->push_back(j);
-              }
-          }
-    }
-    std::sort(group->begin(), group->end());
-  }
-
- private:
-  Eigen::Vector3i Cell(const Eigen::Vector3f& p) const {
-    return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / gap_)),
-                           static_cast<int>(std::floor(p.y() / gap_)),
-                           static_cast<int>(std::floor(p.z() / gap_)));
-  }
-  static int64_t Key(const Eigen::Vector3i& c) {
-    return (static_cast<int64_t>(c.x()) * 73856093) ^ (static_cast<int64_t>(c.y()) * 19349663) ^
-           (static_cast<int64_t>(c.z()) * 83492791);
-  }
-  const std::vector<Surfel>& map_;
-  double gap_;
-  float gap2_;
-  std::unordered_map<int64_t, std::vector<int>> cells_;
-  std::vector<int> members_;
-};
 
 bool IsTransparent(const Surfel& s) {
   return s.source == static_cast<uint8_t>(DepthSource::kTransparent);
@@ -211,6 +157,14 @@ void LaySurfels(const RevolutionShape& shape, const Eigen::Vector3f& u, const Ei
   }
 }
 
+// Two unit directions perpendicular to `axis` and to each other.
+void AcrossAxis(const Eigen::Vector3f& axis, Eigen::Vector3f* u, Eigen::Vector3f* w) {
+  const Eigen::Vector3f any =
+      std::abs(axis.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
+  *u = axis.cross(any).normalized();
+  *w = axis.cross(*u);
+}
+
 // The median distance of the group's surfels from the plane through `mean` (their centroid) that
 // fits them best.
 double PlaneResidual(const std::vector<Surfel>& map, const std::vector<int>& group,
@@ -306,6 +260,27 @@ std::vector<int> WholeSurface(const std::vector<Surfel>& map, const SurfelGrid& 
   return surface;
 }
 
+// What the surfels laid on an object look like: the glass's median confidence and mean colour.
+Surfel LikeGlass(const std::vector<Surfel>& map, const std::vector<int>& glass,
+                 const RevolutionOptions& o) {
+  std::vector<float> confidence;
+  Eigen::Vector3d colour = Eigen::Vector3d::Zero();
+  for (int i : glass) {
+    confidence.push_back(map[i].confidence);
+    colour += Eigen::Vector3d(map[i].red, map[i].green, map[i].blue);
+  }
+  colour /= glass.size();
+  Surfel like;
+  like.confidence = Median(std::move(confidence));
+  like.radius = static_cast<float>(0.75 * o.spacing_m);
+  like.red = static_cast<uint8_t>(colour.x() + 0.5);
+  like.green = static_cast<uint8_t>(colour.y() + 0.5);
+  like.blue = static_cast<uint8_t>(colour.z() + 0.5);
+  like.source = static_cast<uint8_t>(DepthSource::kTransparent);
+  like.last_frame = map[glass.back()].last_frame;
+  return like;
+}
+
 // Standing on a support, its axis is the support's normal and it reaches down to the support.
 // `group`: the surfels fitted; `glass`: its transparent ones, whose look the laid surfels take.
 bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
@@ -313,9 +288,8 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
                RevolutionShape* shape, std::vector<Surfel>* out) {
   Eigen::Vector3f axis = support.normal.cast<float>();
   if (!support.found && !AxisOfNormals(map, group, o.max_axis_spread, &axis)) return false;
-  const Eigen::Vector3f any =
-      std::abs(axis.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
-  const Eigen::Vector3f u = axis.cross(any).normalized(), w = axis.cross(u);
+  Eigen::Vector3f u, w;
+  AcrossAxis(axis, &u, &w);
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   double low = 1e30, high = -1e30;
   for (int i : group) {
@@ -353,24 +327,112 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
   shape->height_m = static_cast<float>(high - low);
   shape->radius_m.assign(radius.begin(), radius.end());
   shape->surfels = static_cast<int>(group.size());
-  // The laid surfels take the glass's median confidence and its mean colour.
-  std::vector<float> confidence;
-  Eigen::Vector3d colour = Eigen::Vector3d::Zero();
-  for (int i : glass) {
-    confidence.push_back(map[i].confidence);
-    colour += Eigen::Vector3d(map[i].red, map[i].green, map[i].blue);
-  }
-  colour /= glass.size();
-  Surfel like;
-  like.confidence = Median(std::move(confidence));
-  like.radius = static_cast<float>(0.75 * o.spacing_m);
-  like.red = static_cast<uint8_t>(colour.x() + 0.5);
-  like.green = static_cast<uint8_t>(colour.y() + 0.5);
-  like.blue = static_cast<uint8_t>(colour.z() + 0.5);
-  like.source = static_cast<uint8_t>(DepthSource::kTransparent);
-  like.last_frame = map[glass.back()].last_frame;
-  LaySurfels(*shape, u, w, like, o.height_step_m, o.spacing_m, out);
+  LaySurfels(*shape, u, w, LikeGlass(map, glass, o), o.height_step_m, o.spacing_m, out);
   return true;
+}
+
+// A standing object FitObject refused, for the outline search: its frame on the support under
+// its surface's middle, its surface's mean normal across the axis, its half width across that
+// normal (5th to 95th percentile), and the map's opaque surfels that a hypothesis could hold.
+StandingObject Standing(const std::vector<Surfel>& map, const std::vector<int>& fitted,
+                        const Support& support, const std::vector<Eigen::Vector3d>& opaque,
+                        const RevolutionOptions& o) {
+  StandingObject s;
+  Eigen::Vector3f u, w;
+  AcrossAxis(support.normal.cast<float>(), &u, &w);
+  s.axis = support.normal, s.u = u.cast<double>(), s.w = w.cast<double>();
+  const Eigen::Vector3d mean = Centre(map, fitted);
+  s.origin = mean - (support.normal.dot(mean) + support.offset) * support.normal;
+  Eigen::Vector2d outward = Eigen::Vector2d::Zero();
+  for (int i : fitted) {
+    const Eigen::Vector3d n = map[i].normal.cast<double>();
+    outward += Eigen::Vector2d(s.u.dot(n), s.w.dot(n));
+    s.height_m = std::max(s.height_m, s.axis.dot(map[i].position.cast<double>() - s.origin));
+  }
+  if (outward.norm() > 1e-9) s.outward = outward.normalized();
+  const Eigen::Vector2d side(-s.outward.y(), s.outward.x());
+  std::vector<double> lateral;
+  for (int i : fitted) {
+    const Eigen::Vector3d rel = map[i].position.cast<double>() - s.origin;
+    lateral.push_back(side.dot(Eigen::Vector2d(s.u.dot(rel), s.w.dot(rel))));
+  }
+  std::sort(lateral.begin(), lateral.end());
+  const size_t n = lateral.size();
+  s.min_radius_m = 0.5 * (lateral[n - 1 - n / 20] - lateral[n / 20]);
+  const double reach2 = 4 * o.max_radius_m * o.max_radius_m;
+  for (const Eigen::Vector3d& p : opaque) {
+    const Eigen::Vector3d rel = p - s.origin;
+    const double h = s.axis.dot(rel);
+    if (h > 0 && h <= s.height_m && (rel - h * s.axis).squaredNorm() <= reach2)
+      s.solid.push_back(p);
+  }
+  return s;
+}
+
+// An object whose outline gave its centre and radius (an upright cylinder on its support): its
+// surfels must lie on that surface and face away from its axis.
+bool FitOutline(const std::vector<Surfel>& map, const std::vector<int>& fitted,
+                const std::vector<int>& glass, const StandingObject& s, const OutlineFit& fit,
+                const RevolutionOptions& o, RevolutionShape* shape, std::vector<Surfel>* out) {
+  std::vector<AxisPoint> points;
+  for (int i : fitted) {
+    const Eigen::Vector3d rel = map[i].position.cast<double>() - s.origin;
+    const Eigen::Vector3d n = map[i].normal.cast<double>();
+    points.push_back({s.u.dot(rel), s.w.dot(rel), std::max(0.0, s.axis.dot(rel)), s.u.dot(n),
+                      s.w.dot(n)});
+  }
+  const int steps = std::max(1, static_cast<int>(std::ceil(s.height_m / o.height_step_m)));
+  const std::vector<double> radius(steps, fit.radius_m);
+  MeasureFit(points, fit.centre, radius, o.height_step_m, shape);
+  if (shape->residual_m > o.max_residual_m || shape->normal_deg > o.max_normal_angle_deg)
+    return false;
+  shape->plane_residual_m = static_cast<float>(PlaneResidual(map, fitted, Centre(map, fitted)));
+  shape->axis = s.axis.cast<float>();
+  shape->standing = true;
+  shape->from_outline = true;
+  shape->edge_ratio = static_cast<float>(fit.edge_ratio);
+  shape->base = (s.origin + fit.centre.x() * s.u + fit.centre.y() * s.w).cast<float>();
+  shape->height_m = static_cast<float>(s.height_m);
+  shape->radius_m.assign(steps, static_cast<float>(fit.radius_m));
+  shape->surfels = static_cast<int>(fitted.size());
+  LaySurfels(*shape, s.u.cast<float>(), s.w.cast<float>(), LikeGlass(map, glass, o),
+             o.height_step_m, o.spacing_m, out);
+  return true;
+}
+
+// A standing object left to the outline search: its surface, its glass, its frame.
+struct Pending {
+  std::vector<int> fitted, glass;
+  StandingObject standing;
+};
+
+// The outline search over the views for the pending objects; those it shapes are added to
+// `result` and their surfels marked `seen` (an object whose surface a completed one took is
+// skipped).
+void FitOutlines(const std::vector<Surfel>& map, const std::vector<Pending>& pending,
+                 const Camera& camera, const OutlineViews& views, const RevolutionOptions& o,
+                 std::vector<bool>* seen, RevolutionResult* result) {
+  std::vector<StandingObject> objects;
+  for (const Pending& p : pending) objects.push_back(p.standing);
+  OutlineSearchOptions search_options;
+  search_options.max_radius_m = o.max_radius_m;
+  search_options.height_step_m = o.height_step_m;
+  search_options.min_edge_ratio = o.min_edge_ratio;
+  OutlineSearch search(std::move(objects), camera, search_options);
+  OutlineView view;
+  for (size_t i = 0; views(i, &view); ++i) search.AddView(view);
+  const std::vector<OutlineFit> fits = search.Fits();
+  for (size_t k = 0; k < pending.size(); ++k) {
+    const Pending& p = pending[k];
+    if (!fits[k].found) continue;
+    if (std::any_of(p.fitted.begin(), p.fitted.end(), [&](int i) { return (*seen)[i]; }))
+      continue;
+    RevolutionShape shape;
+    if (!FitOutline(map, p.fitted, p.glass, p.standing, fits[k], o, &shape, &result->surfels))
+      continue;
+    result->shapes.push_back(std::move(shape));
+    for (int i : p.fitted) (*seen)[i] = true;
+  }
 }
 
 }  // namespace
@@ -393,11 +455,14 @@ bool RevolutionOptions::Check(std::string* message) const {
       .Above("support_inlier_m", support_inlier_m, 0, kMaxSceneM, kLargerThanAnyScene)
       .In("min_support_share", min_support_share, 0, 1, kMoreThanOne)
       .In("min_support_angle_deg", min_support_angle_deg, 0, 90, "is more than a right angle")
-      .In("max_base_gap_m", max_base_gap_m, 0, kMaxSceneM, kLargerThanAnyScene);
+      .In("max_base_gap_m", max_base_gap_m, 0, kMaxSceneM, kLargerThanAnyScene)
+      .In("outline_views", outline_views, 0, kMaxFramesInMemory, kMoreFramesThanMemory)
+      .Above("min_edge_ratio", min_edge_ratio, 0, 1e6, "is more than a million");
   return c.ok();
 }
 
-RevolutionResult FitRevolutions(const std::vector<Surfel>& map, const RevolutionOptions& options) {
+RevolutionResult FitRevolutions(const std::vector<Surfel>& map, const RevolutionOptions& options,
+                                const Camera* camera, const OutlineViews& views) {
   RevolutionResult result;
   if (!options.enabled) return result;
   const std::vector<std::vector<int>> groups = GroupTransparent(map, options.cluster_gap_m);
@@ -411,6 +476,7 @@ RevolutionResult FitRevolutions(const std::vector<Surfel>& map, const Revolution
                                          [](const Surfel&) { return true; });
   }
   std::vector<bool> seen(map.size(), false);  // on the surface of an object completed before
+  std::vector<Pending> pending;               // standing objects left to their outlines
   for (const std::vector<int>& whole_group : groups) {
     // The group's surfels that no object completed before took in.
     std::vector<int> group;
@@ -440,11 +506,17 @@ RevolutionResult FitRevolutions(const std::vector<Surfel>& map, const Revolution
       ++result.objects;
       RevolutionShape shape;
       shaped = FitObject(map, fitted, glass, support, options, &shape, &result.surfels);
-      if (shaped) result.shapes.push_back(std::move(shape));
+      if (shaped)
+        result.shapes.push_back(std::move(shape));
+      else if (support.found && options.fit_outline && camera && views &&
+               std::none_of(pending.begin(), pending.end(),
+                            [&](const Pending& p) { return p.fitted == fitted; }))
+        pending.push_back({fitted, glass, Standing(map, fitted, support, opaque, options)});
     }
     // An object with a shape keeps its surface; a refused one leaves it to the groups after it.
     for (int i : fitted) seen[i] = shaped;
   }
+  if (!pending.empty()) FitOutlines(map, pending, *camera, views, options, &seen, &result);
   return result;
 }
 

@@ -15,7 +15,8 @@
 // per height step. An object is completed only when its surfels lie within max_residual_m of the
 // fitted surface and span min_arc_deg around the axis: a pane (normals all alike), a sphere
 // (normals everywhere) or a few surfels on an outline give no axis or no circle and are left as
-// they are.
+// they are. A standing object whose read strip is too narrow to tell its curvature may take its
+// radius from its outline in colour views (fit_outline, surfels/revolution_outline.h).
 //
 // No threads, no I/O. Usage:
 //   gf::RevolutionResult r = gf::FitRevolutions(fusion.StableSurfels(), options);
@@ -26,6 +27,8 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/camera.h"
+#include "surfels/revolution_outline.h"
 #include "surfels/surfel_map.h"
 
 namespace gf {
@@ -81,6 +84,16 @@ struct RevolutionOptions {
   double min_support_share = 0.1;
   double min_support_angle_deg = 60;
   double max_base_gap_m = 0.1;
+  // A standing object refused above (a narrow strip of a vase seen from the front fits a plane as
+  // well as a circle) takes its radius from its outline in colour views of the run, when views
+  // are given (surfels/revolution_outline.h): the outline whose edges stand out min_edge_ratio
+  // times over the median hypothesis' in outline_views keyframes (evenly spaced over the run; the
+  // pipeline reads them), at least three of which see half of it or more. Its surfels must then
+  // lie on the upright cylinder found (max_residual_m, max_normal_angle_deg). Off: such objects
+  // are left as they are.
+  bool fit_outline = true;
+  int outline_views = 24;
+  double min_edge_ratio = 1.5;
   // Each field within its range, upper bounds as acquisition/bounds.h explains them; the message
   // names the field.
   bool Check(std::string* message = nullptr) const;
@@ -99,6 +112,8 @@ struct RevolutionShape {
   float plane_residual_m = 0;   // their median distance from the plane that fits them best
   float arc_deg = 0;            // how far round the axis they reach
   bool standing = false;        // on a support: base on it, axis its normal
+  bool from_outline = false;    // its radius from its outline in colour views (fit_outline)
+  float edge_ratio = 0;         // ... the outline's edge response over the median hypothesis'
 };
 
 struct RevolutionResult {
@@ -109,6 +124,8 @@ struct RevolutionResult {
   std::vector<Surfel> surfels;          // laid on them: source kTransparent
 };
 
-RevolutionResult FitRevolutions(const std::vector<Surfel>& map, const RevolutionOptions& options);
+// `camera` and `views` (may be empty): colour views of the scene for fit_outline.
+RevolutionResult FitRevolutions(const std::vector<Surfel>& map, const RevolutionOptions& options,
+                                const Camera* camera = nullptr, const OutlineViews& views = {});
 
 }  // namespace gf
