@@ -332,27 +332,35 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
 }
 
 // A standing object FitObject refused, for the outline search: its frame on the support under
-// its surface's middle, its surface's mean normal across the axis, its half width across that
-// normal (5th to 95th percentile), and the map's opaque surfels that a hypothesis could hold.
+// the middle of its glass (the read strip), the glass's mean normal across the axis, its half
+// width across that normal (5th to 95th percentile), its height (of its whole surface), and the
+// map's opaque surfels that a hypothesis could hold (not its own). *span: the share of its height
+// (support to top) that its surface covers.
 StandingObject Standing(const std::vector<Surfel>& map, const std::vector<int>& fitted,
-                        const Support& support, const std::vector<Eigen::Vector3d>& opaque,
-                        const RevolutionOptions& o) {
+                        const std::vector<int>& glass, const Support& support,
+                        const RevolutionOptions& o, double* span) {
   StandingObject s;
   Eigen::Vector3f u, w;
   AcrossAxis(support.normal.cast<float>(), &u, &w);
   s.axis = support.normal, s.u = u.cast<double>(), s.w = w.cast<double>();
-  const Eigen::Vector3d mean = Centre(map, fitted);
+  const Eigen::Vector3d mean = Centre(map, glass);
   s.origin = mean - (support.normal.dot(mean) + support.offset) * support.normal;
-  Eigen::Vector2d outward = Eigen::Vector2d::Zero();
+  double low = 1e30;
   for (int i : fitted) {
+    const double h = s.axis.dot(map[i].position.cast<double>() - s.origin);
+    s.height_m = std::max(s.height_m, h);
+    low = std::min(low, h);
+  }
+  *span = s.height_m > 0 ? (s.height_m - low) / s.height_m : 0;
+  Eigen::Vector2d outward = Eigen::Vector2d::Zero();
+  for (int i : glass) {
     const Eigen::Vector3d n = map[i].normal.cast<double>();
     outward += Eigen::Vector2d(s.u.dot(n), s.w.dot(n));
-    s.height_m = std::max(s.height_m, s.axis.dot(map[i].position.cast<double>() - s.origin));
   }
   if (outward.norm() > 1e-9) s.outward = outward.normalized();
   const Eigen::Vector2d side(-s.outward.y(), s.outward.x());
   std::vector<double> lateral;
-  for (int i : fitted) {
+  for (int i : glass) {
     const Eigen::Vector3d rel = map[i].position.cast<double>() - s.origin;
     lateral.push_back(side.dot(Eigen::Vector2d(s.u.dot(rel), s.w.dot(rel))));
   }
@@ -360,22 +368,25 @@ StandingObject Standing(const std::vector<Surfel>& map, const std::vector<int>& 
   const size_t n = lateral.size();
   s.min_radius_m = 0.5 * (lateral[n - 1 - n / 20] - lateral[n / 20]);
   const double reach2 = 4 * o.max_radius_m * o.max_radius_m;
-  for (const Eigen::Vector3d& p : opaque) {
-    const Eigen::Vector3d rel = p - s.origin;
+  std::vector<bool> own(map.size(), false);
+  for (int i : fitted) own[i] = true;
+  for (size_t i = 0; i < map.size(); ++i) {
+    if (own[i] || IsTransparent(map[i]) || map[i].removed()) continue;
+    const Eigen::Vector3d rel = map[i].position.cast<double>() - s.origin;
     const double h = s.axis.dot(rel);
     if (h > 0 && h <= s.height_m && (rel - h * s.axis).squaredNorm() <= reach2)
-      s.solid.push_back(p);
+      s.solid.push_back(map[i].position.cast<double>());
   }
   return s;
 }
 
 // An object whose outline gave its centre and radius (an upright cylinder on its support): its
-// surfels must lie on that surface and face away from its axis.
+// glass must lie on that surface and face away from its axis.
 bool FitOutline(const std::vector<Surfel>& map, const std::vector<int>& fitted,
                 const std::vector<int>& glass, const StandingObject& s, const OutlineFit& fit,
                 const RevolutionOptions& o, RevolutionShape* shape, std::vector<Surfel>* out) {
   std::vector<AxisPoint> points;
-  for (int i : fitted) {
+  for (int i : glass) {
     const Eigen::Vector3d rel = map[i].position.cast<double>() - s.origin;
     const Eigen::Vector3d n = map[i].normal.cast<double>();
     points.push_back({s.u.dot(rel), s.w.dot(rel), std::max(0.0, s.axis.dot(rel)), s.u.dot(n),
@@ -399,6 +410,11 @@ bool FitOutline(const std::vector<Surfel>& map, const std::vector<int>& fitted,
              o.height_step_m, o.spacing_m, out);
   return true;
 }
+
+// The outline search draws an object from its support to its top: the object's surfels must
+// cover this share of that height or more (a glass read over its front does; a patch of surfels
+// that lies at some distance from a wall, "standing" on it, does not).
+constexpr double kMinOutlineSpan = 0.5;
 
 // A standing object left to the outline search: its surface, its glass, its frame.
 struct Pending {
@@ -510,8 +526,11 @@ RevolutionResult FitRevolutions(const std::vector<Surfel>& map, const Revolution
         result.shapes.push_back(std::move(shape));
       else if (support.found && options.fit_outline && camera && views &&
                std::none_of(pending.begin(), pending.end(),
-                            [&](const Pending& p) { return p.fitted == fitted; }))
-        pending.push_back({fitted, glass, Standing(map, fitted, support, opaque, options)});
+                            [&](const Pending& p) { return p.fitted == fitted; })) {
+        double span = 0;
+        StandingObject standing = Standing(map, fitted, glass, support, options, &span);
+        if (span >= kMinOutlineSpan) pending.push_back({fitted, glass, std::move(standing)});
+      }
     }
     // An object with a shape keeps its surface; a refused one leaves it to the groups after it.
     for (int i : fitted) seen[i] = shaped;
