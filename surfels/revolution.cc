@@ -260,18 +260,17 @@ bool FitObject(const std::vector<Surfel>& map, const std::vector<int>& group,
 }
 
 // A standing object FitObject refused, for the outline search: its frame on the support under
-// the middle of its glass (the read strip), the glass's mean normal across the axis, its half
-// width across that normal (5th to 95th percentile), its height (of its whole surface), and the
-// map's opaque surfels that a hypothesis could hold (not its own). *span: the share of its height
-// (support to top) that its surface covers.
+// the middle of its surface (the glass and what the sensor read of it as opaque), the surface's
+// mean normal across the axis, its half width across that normal (5th to 95th percentile), its
+// height, and the map's opaque surfels that a hypothesis could hold (not its own). *span: the
+// share of its height (support to top) that its surface covers.
 StandingObject Standing(const std::vector<Surfel>& map, const std::vector<int>& fitted,
-                        const std::vector<int>& glass, const Support& support,
-                        const RevolutionOptions& o, double* span) {
+                        const Support& support, const RevolutionOptions& o, double* span) {
   StandingObject s;
   Eigen::Vector3f u, w;
   AcrossAxis(support.normal.cast<float>(), &u, &w);
   s.axis = support.normal, s.u = u.cast<double>(), s.w = w.cast<double>();
-  const Eigen::Vector3d mean = Centre(map, glass);
+  const Eigen::Vector3d mean = Centre(map, fitted);
   s.origin = mean - (support.normal.dot(mean) + support.offset) * support.normal;
   double low = 1e30;
   for (int i : fitted) {
@@ -281,14 +280,14 @@ StandingObject Standing(const std::vector<Surfel>& map, const std::vector<int>& 
   }
   *span = s.height_m > 0 ? (s.height_m - low) / s.height_m : 0;
   Eigen::Vector2d outward = Eigen::Vector2d::Zero();
-  for (int i : glass) {
+  for (int i : fitted) {
     const Eigen::Vector3d n = map[i].normal.cast<double>();
     outward += Eigen::Vector2d(s.u.dot(n), s.w.dot(n));
   }
   if (outward.norm() > 1e-9) s.outward = outward.normalized();
   const Eigen::Vector2d side(-s.outward.y(), s.outward.x());
   std::vector<double> lateral;
-  for (int i : glass) {
+  for (int i : fitted) {
     const Eigen::Vector3d rel = map[i].position.cast<double>() - s.origin;
     lateral.push_back(side.dot(Eigen::Vector2d(s.u.dot(rel), s.w.dot(rel))));
   }
@@ -309,12 +308,12 @@ StandingObject Standing(const std::vector<Surfel>& map, const std::vector<int>& 
 }
 
 // An object whose outline gave its centre and radius (an upright cylinder on its support): its
-// glass must lie on that surface and face away from its axis.
+// surface must lie on that surface and face away from its axis.
 bool FitOutline(const std::vector<Surfel>& map, const std::vector<int>& fitted,
                 const std::vector<int>& glass, const StandingObject& s, const OutlineFit& fit,
                 const RevolutionOptions& o, RevolutionShape* shape, std::vector<Surfel>* out) {
   std::vector<AxisPoint> points;
-  for (int i : glass) {
+  for (int i : fitted) {
     const Eigen::Vector3d rel = map[i].position.cast<double>() - s.origin;
     const Eigen::Vector3d n = map[i].normal.cast<double>();
     points.push_back({s.u.dot(rel), s.w.dot(rel), std::max(0.0, s.axis.dot(rel)), s.u.dot(n),
@@ -456,7 +455,7 @@ RevolutionResult FitRevolutions(const std::vector<Surfel>& map, const Revolution
                std::none_of(pending.begin(), pending.end(),
                             [&](const Pending& p) { return p.fitted == fitted; })) {
         double span = 0;
-        StandingObject standing = Standing(map, fitted, glass, support, options, &span);
+        StandingObject standing = Standing(map, fitted, support, options, &span);
         if (span >= kMinOutlineSpan) pending.push_back({fitted, glass, std::move(standing)});
       }
     }
